@@ -1,0 +1,83 @@
+// The native CPU backend: every kernel with the same semantics as its GLSL twin (same
+// formulas, same summation order, fp32), parallel over images. It is the oracle the Vulkan
+// path is tested against and the fast path on machines without a GPU.
+#include "engine.h"
+
+#include <algorithm>
+#include <thread>
+
+namespace uvpress::engine {
+namespace {
+
+// Runs fn(i) for i in [0, n) on up to `threads` threads, contiguous blocks per thread.
+// Results depend only on i, never on the split, so output is identical for any thread count.
+template <class Fn>
+void parallel_for(uint32_t n, unsigned threads, Fn fn) {
+  unsigned t = std::max(1u, std::min<unsigned>(threads, n));
+  if (t == 1) {
+    for (uint32_t i = 0; i < n; ++i) fn(i);
+    return;
+  }
+  std::vector<std::thread> pool;
+  for (unsigned k = 0; k < t; ++k)
+    pool.emplace_back([=] {
+      for (uint32_t i = uint32_t(uint64_t(n) * k / t); i < uint32_t(uint64_t(n) * (k + 1) / t); ++i) fn(i);
+    });
+  for (auto& th : pool) th.join();
+}
+
+// luminance.comp
+void luminance_image(const uint32_t* rgba, uint32_t w, uint32_t h, float* y) {
+  for (uint32_t i = 0; i < w * h; ++i) {
+    uint32_t c = rgba[i];
+    float r = float(c & 0xffu), g = float((c >> 8) & 0xffu), b = float((c >> 16) & 0xffu);
+    float y8 = 0.299f * r;  // written as separate statements so the compiler cannot fuse
+    y8 += 0.587f * g;
+    y8 += 0.114f * b;
+    y[i] = y8 * (1.0f / 255.0f);
+  }
+}
+
+// downsample2x2.comp
+void downsample_image(const float* y, uint32_t w, uint32_t h, float* d) {
+  uint32_t w2 = (w + 1) / 2, h2 = (h + 1) / 2;
+  auto at = [&](uint32_t x, uint32_t yy) { return (x < w && yy < h) ? y[yy * w + x] : 0.0f; };
+  for (uint32_t j = 0; j < h2; ++j)
+    for (uint32_t i = 0; i < w2; ++i) {
+      float s = at(2 * i, 2 * j) + at(2 * i + 1, 2 * j);
+      s += at(2 * i, 2 * j + 1);
+      s += at(2 * i + 1, 2 * j + 1);
+      d[j * w2 + i] = 0.25f * s;
+    }
+}
+
+class CpuEngine final : public Engine {
+ public:
+  explicit CpuEngine(const EngineOptions& o)
+      : threads_(o.threads ? o.threads : std::max(1u, std::thread::hardware_concurrency())) {}
+
+  DeviceInfo device() const override { return {"cpu", "native C++", "cpu", threads_}; }
+
+  LuminanceBatch luminance(const Rgba8Batch& b) override {
+    const size_t n = size_t(b.width) * b.height, n2 = size_t((b.width + 1) / 2) * ((b.height + 1) / 2);
+    LuminanceBatch out;
+    out.full.resize(n * b.count);
+    out.half.resize(n2 * b.count);
+    parallel_for(b.count, threads_, [&](uint32_t k) {
+      luminance_image(b.pixels + k * n, b.width, b.height, out.full.data() + k * n);
+      downsample_image(out.full.data() + k * n, b.width, b.height, out.half.data() + k * n2);
+    });
+    return out;
+  }
+
+ private:
+  unsigned threads_;
+};
+
+}  // namespace
+
+std::unique_ptr<Engine> make_cpu_engine(const EngineOptions& options) {
+  return std::make_unique<CpuEngine>(options);
+}
+
+}  // namespace uvpress::engine

@@ -1,0 +1,77 @@
+#include "atlas/charts.h"
+
+#include <array>
+#include <cstring>
+#include <numeric>
+#include <unordered_map>
+
+namespace uvpress::atlas {
+
+namespace {
+
+struct DisjointSets {
+  std::vector<uint32_t> parent;
+  explicit DisjointSets(size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0u); }
+  uint32_t find(uint32_t x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];  // path halving
+    return x;
+  }
+  void unite(uint32_t a, uint32_t b) {
+    a = find(a), b = find(b);
+    if (a != b) parent[std::max(a, b)] = std::min(a, b);  // smaller root wins: deterministic
+  }
+};
+
+}  // namespace
+
+Charts find_charts(const Mesh& mesh) {
+  const size_t nt = mesh.triangle_count();
+  DisjointSets sets(mesh.uv_count());
+  for (size_t t = 0; t < nt; ++t) {
+    sets.unite(mesh.uv_triangles[3 * t], mesh.uv_triangles[3 * t + 1]);
+    sets.unite(mesh.uv_triangles[3 * t], mesh.uv_triangles[3 * t + 2]);
+  }
+  Charts charts;
+  charts.chart_of_triangle.resize(nt);
+  std::unordered_map<uint32_t, uint32_t> id;  // root -> chart number, in order of first triangle
+  for (size_t t = 0; t < nt; ++t) {
+    auto [it, fresh] = id.emplace(sets.find(mesh.uv_triangles[3 * t]), charts.count);
+    if (fresh) ++charts.count;
+    charts.chart_of_triangle[t] = it->second;
+  }
+  return charts;
+}
+
+Mesh weld_uv_mesh(const float* positions, const float* uvs, size_t vertex_count, const uint32_t* indices,
+                  size_t index_count) {
+  // Keys are the float bits; "+ 0.0f" folds -0 into +0 first.
+  using Key = std::array<uint32_t, 5>;
+  struct Hash {
+    size_t operator()(const Key& k) const {
+      size_t h = 0;
+      for (uint32_t x : k) h = h * 0x9E3779B97F4A7C15ull + x;
+      return h;
+    }
+  };
+  Mesh m;
+  std::unordered_map<Key, uint32_t, Hash> position_id, uv_id;  // position; position + UV
+  std::vector<uint32_t> to_position(vertex_count), to_uv(vertex_count);
+  for (size_t v = 0; v < vertex_count; ++v) {
+    float f[5] = {positions[3 * v] + 0.0f, positions[3 * v + 1] + 0.0f, positions[3 * v + 2] + 0.0f,
+                  uvs[2 * v] + 0.0f, uvs[2 * v + 1] + 0.0f};
+    Key key{}, key_p{};
+    std::memcpy(key.data(), f, sizeof f);
+    std::memcpy(key_p.data(), f, 3 * sizeof(float));
+    auto [p, new_p] = position_id.emplace(key_p, uint32_t(position_id.size()));
+    if (new_p) m.positions.insert(m.positions.end(), {f[0], f[1], f[2]});
+    auto [u, new_u] = uv_id.emplace(key, uint32_t(uv_id.size()));
+    if (new_u) m.uvs.insert(m.uvs.end(), {f[3], f[4]});
+    to_position[v] = p->second, to_uv[v] = u->second;
+  }
+  const size_t n = index_count / 3 * 3;
+  m.triangles.resize(n), m.uv_triangles.resize(n);
+  for (size_t i = 0; i < n; ++i) m.triangles[i] = to_position[indices[i]], m.uv_triangles[i] = to_uv[indices[i]];
+  return m;
+}
+
+}  // namespace uvpress::atlas

@@ -1,0 +1,74 @@
+#include "io/atomic_file.h"
+
+#include "core/error.h"
+
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <sys/stat.h>
+#include <unistd.h>
+
+namespace uvpress::io {
+
+namespace fs = std::filesystem;
+
+AtomicWriter::~AtomicWriter() {
+  for (auto& e : entries_) std::remove(e.temp.c_str());
+}
+
+void AtomicWriter::add(const std::string& path, const void* bytes, size_t size) {
+  fs::path target(path);
+  fs::path dir = target.parent_path().empty() ? fs::path(".") : target.parent_path();
+  if (!fs::is_directory(dir)) throw InputError(path, "output folder '" + dir.string() + "' does not exist");
+  std::string temp = (dir / ("." + target.filename().string() + ".tmp-XXXXXX")).string();
+  int fd = mkstemp(temp.data());
+  if (fd < 0) throw InputError(path, std::string("cannot create a file here: ") + std::strerror(errno));
+  entries_.push_back({temp, path});
+  const char* p = static_cast<const char*>(bytes);
+  while (size > 0) {
+    ssize_t n = ::write(fd, p, size);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) {
+      int err = errno;
+      ::close(fd);
+      throw InputError(path, std::string("write failed: ") + std::strerror(err));
+    }
+    p += n, size -= size_t(n);
+  }
+  // Data on disk before the rename makes it visible, so a crash never leaves a torn file.
+  if (::fsync(fd) != 0 || ::close(fd) != 0) throw InputError(path, std::string("write failed: ") + std::strerror(errno));
+  ::chmod(temp.c_str(), 0644);
+}
+
+void AtomicWriter::commit() {
+  for (auto& e : entries_) {
+    if (std::rename(e.temp.c_str(), e.target.c_str()) != 0)
+      throw InputError(e.target, std::string("cannot rename into place: ") + std::strerror(errno));
+    e.temp.clear();
+  }
+  entries_.clear();
+}
+
+std::vector<uint8_t> read_file(const std::string& path) {
+  std::error_code ec;
+  if (!fs::exists(path, ec)) throw InputError(path, "file not found");
+  if (fs::is_directory(path, ec)) throw InputError(path, "is a directory, not a file");
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path, "cannot open for reading");
+  in.seekg(0, std::ios::end);
+  std::streamoff size = in.tellg();
+  in.seekg(0);
+  std::vector<uint8_t> bytes(size_t(std::max<std::streamoff>(size, 0)));
+  if (!bytes.empty() && !in.read(reinterpret_cast<char*>(bytes.data()), size)) throw InputError(path, "read failed");
+  return bytes;
+}
+
+std::string extension_of(const std::string& path) {
+  std::string ext = fs::path(path).extension().string();
+  for (auto& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+  return ext;
+}
+
+}  // namespace uvpress::io

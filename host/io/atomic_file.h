@@ -1,0 +1,38 @@
+// Outputs appear whole or not at all: every file is written to a temporary name beside
+// its target and renamed into place only when all of them have been written.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace uvpress::io {
+
+class AtomicWriter {
+ public:
+  AtomicWriter() = default;
+  ~AtomicWriter();  // removes the temporaries of an uncommitted write
+  AtomicWriter(const AtomicWriter&) = delete;
+  AtomicWriter& operator=(const AtomicWriter&) = delete;
+
+  // Writes `bytes` to a temporary beside `path`. Throws InputError(path, reason).
+  void add(const std::string& path, const void* bytes, size_t size);
+  void add(const std::string& path, const std::vector<uint8_t>& bytes) { add(path, bytes.data(), bytes.size()); }
+  void add(const std::string& path, const std::string& text) { add(path, text.data(), text.size()); }
+  // Renames every temporary onto its target, in the order added (add the main file last).
+  void commit();
+
+ private:
+  struct Entry {
+    std::string temp, target;
+  };
+  std::vector<Entry> entries_;
+};
+
+// Reads a whole file. Throws InputError(path, "file not found" / reason).
+std::vector<uint8_t> read_file(const std::string& path);
+
+// Lower-case extension with the dot (".glb"), or "" when there is none.
+std::string extension_of(const std::string& path);
+
+}  // namespace uvpress::io

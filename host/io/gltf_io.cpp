@@ -1,0 +1,242 @@
+#include "io/gltf_io.h"
+
+#include "core/error.h"
+#include "io/atomic_file.h"
+#include "io/image_io.h"
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <filesystem>
+#include <set>
+#include <sstream>
+
+namespace uvpress::io {
+
+namespace fs = std::filesystem;
+
+bool is_supported_required_extension(const std::string& name) {
+  // Texture transforms and quantized attributes are read (asset.cpp); the material and
+  // lighting extensions change shading only, which uvpress carries through untouched.
+  static const std::set<std::string> supported = {
+      "KHR_texture_transform", "KHR_mesh_quantization", "KHR_materials_unlit", "KHR_materials_emissive_strength",
+      "KHR_materials_ior", "KHR_materials_specular", "KHR_materials_transmission", "KHR_materials_volume",
+      "KHR_materials_clearcoat", "KHR_materials_sheen", "KHR_materials_iridescence", "KHR_materials_variants",
+      "KHR_lights_punctual"};
+  return supported.count(name) > 0;
+}
+
+bool is_gltf_output_path(const std::string& path) {
+  std::string ext = extension_of(path);
+  return ext == ".gltf" || ext == ".glb";
+}
+
+namespace {
+
+// tinygltf errors come as several lines; the user gets one.
+std::string one_line(std::string s) {
+  while (!s.empty() && (s.back() == '\n' || s.back() == ' ')) s.pop_back();
+  std::replace(s.begin(), s.end(), '\n', ';');
+  return s.empty() ? "unreadable glTF" : s;
+}
+
+// Keeps each image's encoded bytes instead of decoding them: uvpress decodes on demand
+// with OpenImageIO, and untouched images are written back byte for byte.
+bool keep_image_bytes(tinygltf::Image*, const int index, std::string*, std::string*, int, int,
+                      const unsigned char* bytes, int size, void* user) {
+  auto& store = *static_cast<std::vector<std::vector<uint8_t>>*>(user);
+  if (index < 0) return false;
+  if (size_t(index) >= store.size()) store.resize(size_t(index) + 1);
+  store[size_t(index)].assign(bytes, bytes + std::max(size, 0));
+  return true;
+}
+
+// Images are written by save_gltf itself; tinygltf only serializes their URI.
+bool skip_image_write(const std::string*, const std::string*, const tinygltf::Image*, bool, std::string*, void*) {
+  return false;
+}
+
+bool looks_binary(const std::vector<uint8_t>& head) {
+  return head.size() >= 4 && head[0] == 'g' && head[1] == 'l' && head[2] == 'T' && head[3] == 'F';
+}
+
+}  // namespace
+
+GltfFile load_gltf(const std::string& path) {
+  std::vector<uint8_t> bytes = read_file(path);
+  if (bytes.empty()) throw InputError(path, "file is empty");
+  GltfFile file;
+  file.path = path;
+
+  tinygltf::TinyGLTF loader;
+  loader.SetImageLoader(&keep_image_bytes, &file.image_bytes);
+  loader.SetStoreOriginalJSONForExtrasAndExtensions(false);
+  std::string err, warn;
+  std::string base_dir = fs::path(path).parent_path().string();
+  bool ok;
+  if (looks_binary(bytes)) {
+    if (bytes.size() < 20) throw InputError(path, "truncated .glb (shorter than its header)");
+    ok = loader.LoadBinaryFromMemory(&file.model, &err, &warn, bytes.data(), unsigned(bytes.size()), base_dir);
+  } else {
+    std::string ext = extension_of(path);
+    if (ext == ".glb") throw InputError(path, "not a glTF binary (wrong magic, expected 'glTF')");
+    ok = loader.LoadASCIIFromString(&file.model, &err, &warn, reinterpret_cast<const char*>(bytes.data()),
+                                    unsigned(bytes.size()), base_dir);
+  }
+  if (!ok) throw InputError(path, one_line(err));
+  if (file.model.asset.version.rfind("2.", 0) != 0)
+    throw InputError(path, "glTF version '" + file.model.asset.version + "' is not 2.x");
+
+  for (const std::string& ext : file.model.extensionsRequired)
+    if (!is_supported_required_extension(ext)) throw InputError(path, "requires unsupported extension " + ext);
+
+  // tinygltf only warns about an image it could not read; for uvpress that is an error.
+  file.image_bytes.resize(file.model.images.size());
+  for (size_t i = 0; i < file.model.images.size(); ++i) {
+    if (!file.image_bytes[i].empty()) continue;
+    const auto& image = file.model.images[i];
+    std::string what = image.uri.empty() ? "image " + std::to_string(i)
+                                         : "image " + std::to_string(i) + " ('" + image.uri.substr(0, 64) + "')";
+    throw InputError(path, what + " is missing or empty");
+  }
+  return file;
+}
+
+namespace {
+
+size_t align(size_t n, size_t a) { return (n + a - 1) / a * a; }
+
+// True when image i's bytes still equal what its bufferView holds.
+bool view_holds(const tinygltf::Model& m, const tinygltf::Image& image, const std::vector<uint8_t>& bytes) {
+  if (image.bufferView < 0 || size_t(image.bufferView) >= m.bufferViews.size()) return false;
+  const auto& view = m.bufferViews[size_t(image.bufferView)];
+  if (view.buffer < 0 || size_t(view.buffer) >= m.buffers.size()) return false;
+  const auto& data = m.buffers[size_t(view.buffer)].data;
+  return view.byteLength == bytes.size() && view.byteOffset + view.byteLength <= data.size() &&
+         std::equal(bytes.begin(), bytes.end(), data.begin() + long(view.byteOffset));
+}
+
+std::string extension_for(const std::vector<uint8_t>& bytes) {
+  std::string f = sniff_image_format(bytes.data(), bytes.size());
+  return f == "jpeg" ? ".jpg" : f.empty() ? ".bin" : "." + f;
+}
+
+// A file name that is safe to write beside the output: letters, digits, '-', '_', '.'.
+std::string safe_name(std::string s) {
+  for (auto& c : s)
+    if (!std::isalnum(static_cast<unsigned char>(c)) && c != '-' && c != '_' && c != '.') c = '_';
+  return s;
+}
+
+std::string serialize(tinygltf::Model& m, bool binary) {
+  tinygltf::TinyGLTF writer;
+  writer.SetImageWriter(&skip_image_write, nullptr);
+  std::ostringstream out;
+  if (!writer.WriteGltfSceneToStream(&m, out, !binary, binary)) throw std::runtime_error("glTF serialization failed");
+  return out.str();
+}
+
+void save_glb(const GltfFile& file, const std::string& path) {
+  tinygltf::Model m = file.model;
+  // One buffer: the BIN chunk. Every old buffer is appended at a 16-byte aligned offset.
+  tinygltf::Buffer merged;
+  std::vector<size_t> base(m.buffers.size());
+  for (size_t b = 0; b < m.buffers.size(); ++b) {
+    base[b] = align(merged.data.size(), 16);
+    merged.data.resize(base[b]);
+    merged.data.insert(merged.data.end(), m.buffers[b].data.begin(), m.buffers[b].data.end());
+  }
+  if (!m.buffers.empty()) {
+    merged.name = m.buffers[0].name;
+    merged.extras = m.buffers[0].extras;
+  }
+  for (auto& view : m.bufferViews) {
+    if (view.buffer < 0 || size_t(view.buffer) >= base.size()) continue;
+    view.byteOffset += base[size_t(view.buffer)];
+    view.buffer = 0;
+  }
+  // Images that are not (or no longer) in a bufferView go into the BIN chunk.
+  for (size_t i = 0; i < m.images.size(); ++i) {
+    auto& image = m.images[i];
+    const auto& bytes = file.image_bytes[i];
+    if (view_holds(file.model, file.model.images[i], bytes)) continue;
+    tinygltf::BufferView view;
+    view.buffer = 0;
+    view.byteOffset = align(merged.data.size(), 16);
+    view.byteLength = bytes.size();
+    merged.data.resize(view.byteOffset);
+    merged.data.insert(merged.data.end(), bytes.begin(), bytes.end());
+    image.bufferView = int(m.bufferViews.size());
+    image.mimeType = mime_of_format(sniff_image_format(bytes.data(), bytes.size()));
+    image.uri.clear();
+    m.bufferViews.push_back(view);
+  }
+  m.buffers.clear();
+  if (!merged.data.empty()) {
+    merged.data.resize(align(merged.data.size(), 4));
+    m.buffers.push_back(std::move(merged));
+  }
+  AtomicWriter writer;
+  writer.add(path, serialize(m, true));
+  writer.commit();
+}
+
+void save_text_gltf(const GltfFile& file, const std::string& path) {
+  tinygltf::Model m = file.model;
+  fs::path target(path);
+  const std::string stem = target.stem().string();
+  const fs::path dir = target.parent_path();
+  AtomicWriter writer;
+  std::set<std::string> used;
+  auto unique = [&](std::string name) {
+    name = safe_name(name);
+    std::string candidate = name;
+    for (int k = 1; used.count(candidate); ++k)
+      candidate = fs::path(name).stem().string() + "_" + std::to_string(k) + fs::path(name).extension().string();
+    used.insert(candidate);
+    return candidate;
+  };
+
+  // Images: kept in their bufferView when unchanged, otherwise one file each.
+  for (size_t i = 0; i < m.images.size(); ++i) {
+    auto& image = m.images[i];
+    const auto& bytes = file.image_bytes[i];
+    if (view_holds(file.model, file.model.images[i], bytes)) continue;
+    std::string original = image.uri.rfind("data:", 0) == 0 ? "" : fs::path(image.uri).filename().string();
+    std::string name = unique(stem + "_" + (original.empty() ? "image" + std::to_string(i) + extension_for(bytes)
+                                                             : original));
+    writer.add((dir / name).string(), bytes);
+    image.uri = name;
+    image.bufferView = -1;
+    image.mimeType.clear();
+  }
+
+  // Buffers: one .bin each. tinygltf would inline them as base64; serialize without the
+  // bytes and patch uri and byteLength afterwards.
+  std::vector<std::string> names;
+  std::vector<size_t> lengths;
+  for (size_t b = 0; b < m.buffers.size(); ++b) {
+    names.push_back(unique(m.buffers.size() == 1 ? stem + ".bin" : stem + "_" + std::to_string(b) + ".bin"));
+    lengths.push_back(m.buffers[b].data.size());
+    writer.add((dir / names.back()).string(), m.buffers[b].data);
+    m.buffers[b].data.clear();
+  }
+  nlohmann::ordered_json json = nlohmann::ordered_json::parse(serialize(m, false));
+  for (size_t b = 0; b < names.size(); ++b) {
+    json["buffers"][b]["uri"] = names[b];
+    json["buffers"][b]["byteLength"] = lengths[b];
+  }
+  writer.add(path, json.dump(2) + "\n");
+  writer.commit();
+}
+
+}  // namespace
+
+void save_gltf(const GltfFile& file, const std::string& path) {
+  std::string ext = extension_of(path);
+  if (ext == ".glb") return save_glb(file, path);
+  if (ext == ".gltf") return save_text_gltf(file, path);
+  throw InputError(path, "unsupported output format '" + ext + "' (use .gltf or .glb)");
+}
+
+}  // namespace uvpress::io

@@ -1,0 +1,37 @@
+// glTF 2.0 in and out through tinygltf: .gltf with external or data: resources, and .glb.
+// Everything uvpress does not change survives a load/save round trip: the tinygltf model
+// is kept whole, images stay in their encoded form (no re-encoding of untouched textures).
+#pragma once
+
+#include <tiny_gltf.h>
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace uvpress::io {
+
+struct GltfFile {
+  std::string path;
+  tinygltf::Model model;
+  // The encoded bytes (PNG, JPEG, ...) of every image, wherever the file kept them. A stage
+  // that re-bakes a texture replaces its entry; save writes what is here.
+  std::vector<std::vector<uint8_t>> image_bytes;
+};
+
+// Extensions uvpress reads correctly when an asset lists them as required.
+bool is_supported_required_extension(const std::string& name);
+
+// Throws InputError(path, reason) for anything unreadable: a missing file, bad JSON or
+// binary layout, broken resources, a missing image, an unsupported required extension.
+GltfFile load_gltf(const std::string& path);
+
+// Writes by extension: .glb (one binary chunk holding every buffer and image) or .gltf
+// (pretty JSON plus <stem>.bin and one file per image beside it). All files are written
+// to temporaries and renamed at the end: no partial output. Throws InputError.
+void save_gltf(const GltfFile& file, const std::string& path);
+
+// True for the output extensions save_gltf takes.
+bool is_gltf_output_path(const std::string& path);
+
+}  // namespace uvpress::io

@@ -1,0 +1,108 @@
+#include "io/image_io.h"
+
+#include "core/error.h"
+
+#include <OpenImageIO/filesystem.h>
+#include <OpenImageIO/imageio.h>
+
+#include <cstring>
+#include <memory>
+
+namespace uvpress::io {
+
+namespace oiio = OIIO;
+
+std::string sniff_image_format(const uint8_t* b, size_t n) {
+  auto starts = [&](const char* magic, size_t len, size_t at = 0) {
+    return n >= at + len && std::memcmp(b + at, magic, len) == 0;
+  };
+  if (starts("\x89PNG\r\n\x1a\n", 8)) return "png";
+  if (starts("\xff\xd8\xff", 3)) return "jpeg";
+  if (starts("\xabKTX 20\xbb\r\n\x1a\n", 12)) return "ktx2";
+  if (starts("RIFF", 4) && starts("WEBP", 4, 8)) return "webp";
+  if (starts("GIF8", 4)) return "gif";
+  if (starts("BM", 2)) return "bmp";
+  return "";
+}
+
+std::string mime_of_format(const std::string& f) {
+  if (f == "png") return "image/png";
+  if (f == "jpeg") return "image/jpeg";
+  if (f == "ktx2") return "image/ktx2";
+  if (f == "webp") return "image/webp";
+  return "application/octet-stream";
+}
+
+namespace {
+
+// Opens an in-memory PNG or JPEG; the proxy must outlive the input.
+std::unique_ptr<oiio::ImageInput> open_memory(const std::vector<uint8_t>& bytes, const std::string& name,
+                                              oiio::Filesystem::IOMemReader& proxy, std::string& format) {
+  if (bytes.empty()) throw InputError(name, "image is empty (0 bytes)");
+  format = sniff_image_format(bytes.data(), bytes.size());
+  if (format.empty()) throw InputError(name, "image is not PNG or JPEG (unrecognized data)");
+  if (format != "png" && format != "jpeg")
+    throw InputError(name, "image format " + format + " is not supported (PNG and JPEG are)");
+  oiio::ImageSpec config;
+  config.attribute("oiio:UnassociatedAlpha", 1);  // keep straight alpha as stored, no premultiply
+  auto in = oiio::ImageInput::open(format == "png" ? "memory.png" : "memory.jpg", &config, &proxy);
+  if (!in) throw InputError(name, "corrupt " + format + " image: " + oiio::geterror());
+  const oiio::ImageSpec& s = in->spec();
+  if (s.width <= 0 || s.height <= 0 || s.nchannels <= 0 || s.nchannels > 4)
+    throw InputError(name, "image has an invalid size or channel count");
+  if (uint32_t(s.width) > kMaxImageSide || uint32_t(s.height) > kMaxImageSide)
+    throw InputError(name, "image is " + std::to_string(s.width) + "x" + std::to_string(s.height) +
+                               ", larger than the supported " + std::to_string(kMaxImageSide) + " per side");
+  return in;
+}
+
+uint32_t bits_of(const oiio::ImageSpec& s) { return s.format.size() >= 2 ? 16 : 8; }
+
+}  // namespace
+
+ImageHeader read_image_header(const std::vector<uint8_t>& bytes, const std::string& name) {
+  oiio::Filesystem::IOMemReader proxy(bytes.data(), bytes.size());
+  ImageHeader h;
+  auto in = open_memory(bytes, name, proxy, h.format);
+  const auto& s = in->spec();
+  h.width = uint32_t(s.width), h.height = uint32_t(s.height), h.channels = uint32_t(s.nchannels), h.bits = bits_of(s);
+  return h;
+}
+
+Image decode_image(const std::vector<uint8_t>& bytes, const std::string& name) {
+  oiio::Filesystem::IOMemReader proxy(bytes.data(), bytes.size());
+  std::string format;
+  auto in = open_memory(bytes, name, proxy, format);
+  const auto& s = in->spec();
+  Image image;
+  image.width = uint32_t(s.width), image.height = uint32_t(s.height), image.channels = uint32_t(s.nchannels);
+  image.bits = bits_of(s);
+  image.pixels.resize(size_t(image.width) * image.height * image.channels);
+  // Read as float: OIIO maps 8- and 16-bit unsigned values to [0,1] exactly (v / 255, v / 65535).
+  if (!in->read_image(0, 0, 0, s.nchannels, oiio::TypeDesc::FLOAT, image.pixels.data()))
+    throw InputError(name, "corrupt " + format + " image: " + in->geterror());
+  return image;
+}
+
+std::vector<uint8_t> encode_image(const Image& image, const std::string& format) {
+  if (image.width == 0 || image.height == 0 || image.channels == 0 || image.channels > 4 ||
+      image.pixels.size() != size_t(image.width) * image.height * image.channels)
+    throw std::invalid_argument("encode_image: inconsistent image");
+  std::vector<uint8_t> out;
+  oiio::Filesystem::IOVecOutput proxy(out);
+  const bool png = format == "png";
+  if (!png && format != "jpeg") throw std::invalid_argument("encode_image: format must be png or jpeg");
+  auto writer = oiio::ImageOutput::create(png ? "memory.png" : "memory.jpg", &proxy);
+  if (!writer) throw std::runtime_error("OpenImageIO has no " + format + " writer: " + oiio::geterror());
+  oiio::TypeDesc type = (png && image.bits == 16) ? oiio::TypeDesc::UINT16 : oiio::TypeDesc::UINT8;
+  oiio::ImageSpec spec(int(image.width), int(image.height), int(image.channels), type);
+  if (!png) spec.attribute("CompressionQuality", 95);
+  // Keep stored values as they are: no colour-space conversion, no premultiplication.
+  spec.attribute("oiio:UnassociatedAlpha", 1);
+  if (!writer->open("memory", spec) ||
+      !writer->write_image(oiio::TypeDesc::FLOAT, image.pixels.data()) || !writer->close())
+    throw std::runtime_error("encoding " + format + " failed: " + writer->geterror());
+  return out;
+}
+
+}  // namespace uvpress::io

@@ -1,0 +1,34 @@
+// Texture images through OpenImageIO: decode from the bytes a glTF carries (file, data:
+// URI or bufferView alike), encode back to PNG or JPEG. Formats are recognized by their
+// magic bytes, not by names, because glTF mimeTypes and URIs are often wrong.
+#pragma once
+
+#include "core/image.h"
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace uvpress::io {
+
+// "png", "jpeg", "ktx2", "webp", "gif", "bmp", or "" when unknown.
+std::string sniff_image_format(const uint8_t* bytes, size_t size);
+// "image/png", "image/jpeg", ... for a sniffed format.
+std::string mime_of_format(const std::string& format);
+
+struct ImageHeader {
+  uint32_t width = 0, height = 0, channels = 0, bits = 8;
+  std::string format;
+};
+
+// Limits that keep a declared size from exhausting memory (16K x 16K texels).
+constexpr uint32_t kMaxImageSide = 16384;
+
+// `name` labels errors (the asset file and image index). Throws InputError.
+ImageHeader read_image_header(const std::vector<uint8_t>& bytes, const std::string& name);
+Image decode_image(const std::vector<uint8_t>& bytes, const std::string& name);
+
+// Encodes as "png" (8 or 16 bit, as image.bits says) or "jpeg" (8 bit, quality 95).
+std::vector<uint8_t> encode_image(const Image& image, const std::string& format);
+
+}  // namespace uvpress::io

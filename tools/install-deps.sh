@@ -1,0 +1,42 @@
+#!/usr/bin/env bash
+# Installs everything uvpress needs to build, test and run its demo on Debian bookworm:
+# Debian packages through apt-get, and the Khronos glTF validator from npm into
+# tools/node_modules (project-local, never global). Idempotent: when everything is
+# present it only checks and returns.
+set -euo pipefail
+here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
+
+packages=(
+  build-essential cmake pkg-config git ca-certificates
+  libvulkan-dev mesa-vulkan-drivers vulkan-validationlayers vulkan-tools glslang-tools spirv-tools
+  libeigen3-dev libsuitesparse-dev libopenblas-dev
+  libtinygltf-dev nlohmann-json3-dev libstb-dev
+  libopenimageio-dev openimageio-tools
+  catch2 libcli11-dev libnlopt-cxx-dev
+)
+
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+# Node.js and npm: any working node >= 18 with npm will do (some images ship NodeSource's,
+# which bundles npm and conflicts with Debian's npm package).
+if ! command -v node >/dev/null 2>&1 || ! command -v npm >/dev/null 2>&1; then
+  missing+=(nodejs npm)
+fi
+
+sudo=""
+[ "$(id -u)" = 0 ] || sudo="sudo"
+if [ ${#missing[@]} -gt 0 ]; then
+  echo "install-deps: installing ${missing[*]}" >&2
+  export DEBIAN_FRONTEND=noninteractive
+  $sudo apt-get update -qq
+  $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+fi
+
+# Khronos glTF validator (a library; tools/validate-gltf.mjs drives it).
+if [ ! -f "$here/node_modules/gltf-validator/package.json" ]; then
+  echo "install-deps: installing gltf-validator from npm into tools/node_modules" >&2
+  (cd "$here" && npm install --no-audit --no-fund --silent >/dev/null)
+fi
+echo "install-deps: ok" >&2
