@@ -45,6 +45,8 @@ std::unique_ptr<oiio::ImageInput> open_memory(const std::vector<uint8_t>& bytes,
     throw InputError(name, "image format " + format + " is not supported (PNG and JPEG are)");
   oiio::ImageSpec config;
   config.attribute("oiio:UnassociatedAlpha", 1);  // keep straight alpha as stored, no premultiply
+  void* proxy_ptr = &proxy;
+  config.attribute("oiio:ioproxy", oiio::TypeDesc::PTR, &proxy_ptr);
   auto in = oiio::ImageInput::open(format == "png" ? "memory.png" : "memory.jpg", &config, &proxy);
   if (!in) throw InputError(name, "corrupt " + format + " image: " + oiio::geterror());
   const oiio::ImageSpec& s = in->spec();
@@ -96,7 +98,7 @@ std::vector<uint8_t> encode_image(const Image& image, const std::string& format)
   if (!writer) throw std::runtime_error("OpenImageIO has no " + format + " writer: " + oiio::geterror());
   oiio::TypeDesc type = (png && image.bits == 16) ? oiio::TypeDesc::UINT16 : oiio::TypeDesc::UINT8;
   oiio::ImageSpec spec(int(image.width), int(image.height), int(image.channels), type);
-  if (!png) spec.attribute("CompressionQuality", 95);
+  if (!png) spec.attribute("Compression", "jpeg:95");
   // Keep stored values as they are: no colour-space conversion, no premultiplication.
   spec.attribute("oiio:UnassociatedAlpha", 1);
   if (!writer->open("memory", spec) ||

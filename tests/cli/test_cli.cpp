@@ -1,0 +1,137 @@
+// The uvpress binary as a user runs it: exit codes, one-line errors naming the file, no
+// partial output, and the documented commands.
+#include <catch2/catch.hpp>
+
+#include "io/gltf_io.h"
+#include "pipeline/demo_asset.h"
+#include "support.h"
+
+#include <fstream>
+#include <set>
+#include <sstream>
+
+using namespace uvpress;
+using test::run_uvpress;
+
+namespace {
+
+std::string quoted(const test::fs::path& p) { return "'" + p.string() + "'"; }
+
+// exit 1, exactly one stderr line that names `file`, and the folder unchanged.
+void check_input_error(const test::Scratch& dir, const std::string& args, const test::fs::path& file,
+                       const std::string& reason) {
+  auto before = dir.files();
+  auto r = run_uvpress(args);
+  INFO("uvpress " << args << "\nstderr: " << r.err);
+  CHECK(r.exit_code == 1);
+  auto lines = r.err_lines();
+  REQUIRE(lines.size() == 1);
+  CHECK_THAT(lines[0], Catch::Contains(file.string()));
+  CHECK_THAT(lines[0], Catch::Contains(reason));
+  CHECK(r.out.empty());
+  CHECK(dir.files() == before);  // no output, no temporaries
+}
+
+}  // namespace
+
+TEST_CASE("CLI: --version, --help and usage errors", "[cli]") {
+  auto v = run_uvpress("--version");
+  CHECK(v.exit_code == 0);
+  CHECK_THAT(v.out, Catch::StartsWith("uvpress "));
+  CHECK(run_uvpress("--help").exit_code == 0);
+  CHECK(run_uvpress("").exit_code == 2);
+  CHECK(run_uvpress("frobnicate").exit_code == 2);
+  CHECK(run_uvpress("info").exit_code == 2);
+  CHECK(run_uvpress("info x.glb --device cuda").exit_code == 2);
+  CHECK(run_uvpress("copy x.glb").exit_code == 2);  // -o is required
+}
+
+TEST_CASE("CLI: malformed inputs give exit 1, one line naming the file, no output", "[cli]") {
+  test::Scratch dir("cli-bad");
+  io::save_gltf(pipeline::make_demo_asset({8, 32}), (dir / "good.glb").string());
+  std::vector<char> glb;
+  {
+    std::ifstream in(dir / "good.glb", std::ios::binary);
+    glb.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  std::ofstream(dir / "truncated.glb", std::ios::binary).write(glb.data(), long(glb.size() / 2));
+  std::ofstream(dir / "bad.gltf") << "{\"asset\": {\"version\": \"2.0\"}, \"nodes\": [";
+  std::ofstream(dir / "noimage.gltf") << R"({"asset":{"version":"2.0"},"images":[{"uri":"gone.png"}]})";
+  std::ofstream(dir / "required.gltf")
+      << R"({"asset":{"version":"2.0"},"extensionsUsed":["EXT_unknown_thing"],"extensionsRequired":["EXT_unknown_thing"]})";
+  auto out = dir / "out.glb";
+
+  check_input_error(dir, "copy " + quoted(dir / "truncated.glb") + " -o " + quoted(out), dir / "truncated.glb", "");
+  check_input_error(dir, "copy " + quoted(dir / "bad.gltf") + " -o " + quoted(out), dir / "bad.gltf", "");
+  check_input_error(dir, "copy " + quoted(dir / "noimage.gltf") + " -o " + quoted(out), dir / "noimage.gltf",
+                    "gone.png");
+  check_input_error(dir, "copy " + quoted(dir / "required.gltf") + " -o " + quoted(out), dir / "required.gltf",
+                    "EXT_unknown_thing");
+  check_input_error(dir, "info " + quoted(dir / "nothere.glb"), dir / "nothere.glb", "not found");
+  check_input_error(dir, "copy " + quoted(dir / "good.glb") + " -o " + quoted(dir / "out.fbx"), dir / "out.fbx",
+                    "unsupported output format");
+  check_input_error(dir, "info " + quoted(dir / "truncated.glb"), dir / "truncated.glb", "");
+}
+
+TEST_CASE("CLI: info prints Duck's triangles, UV set and texture", "[cli][shared]") {
+  auto shared = test::shared_dir();
+  if (!shared) UVPRESS_SKIP("../shared is absent");
+  test::Scratch dir("cli-info");
+  auto r = run_uvpress("info " + quoted(*shared / "assets/Duck/glTF-Binary/Duck.glb") + " --report " +
+                       quoted(dir / "duck.json"));
+  INFO(r.err);
+  REQUIRE(r.exit_code == 0);
+  CHECK_THAT(r.out, Catch::Contains("4212 triangles"));
+  CHECK_THAT(r.out, Catch::Contains("TEXCOORD_0"));
+  CHECK_THAT(r.out, Catch::Contains("512x512"));
+  std::ifstream in(dir / "duck.json");
+  auto report = nlohmann::json::parse(in);
+  CHECK(report["triangles"] == 4212);
+  CHECK(report["images"][0]["width"] == 512);
+}
+
+TEST_CASE("CLI: copy writes a valid .glb and .gltf", "[cli][shared]") {
+  auto shared = test::shared_dir();
+  if (!shared) UVPRESS_SKIP("../shared is absent");
+  test::Scratch dir("cli-copy");
+  for (const char* name : {"truck.glb", "truck.gltf"}) {
+    auto r = run_uvpress("copy " + quoted(*shared / "assets/CesiumMilkTruck/glTF/CesiumMilkTruck.gltf") + " -o " +
+                         quoted(dir / name));
+    INFO(r.err);
+    REQUIRE(r.exit_code == 0);
+    CHECK(r.err.empty());  // quiet by default
+    CHECK(test::validate_gltf(dir / name)["numErrors"] == 0);
+  }
+}
+
+TEST_CASE("CLI: demo writes the asset and reports its device", "[cli][demo]") {
+  test::Scratch dir("cli-demo");
+  auto r = run_uvpress("demo -o " + quoted(dir.path()) + " --device cpu -v --report " + quoted(dir / "demo.json"));
+  INFO(r.err);
+  REQUIRE(r.exit_code == 0);
+  CHECK(test::validate_gltf(dir / "demo.glb")["numErrors"] == 0);
+  CHECK_THAT(r.err, Catch::Contains("device: cpu"));
+  std::ifstream in(dir / "demo.json");
+  auto report = nlohmann::json::parse(in);
+  CHECK(report["backend"] == "cpu");
+  CHECK(report["triangles"] == 4608);
+}
+
+TEST_CASE("CLI: bench luminance prints one JSON line per backend, validation clean", "[cli][vulkan]") {
+  auto r = run_uvpress("bench luminance --batch 20 --size 16 --repeat 1 --vulkan-validation");
+  INFO(r.err);
+  REQUIRE(r.exit_code == 0);
+  CHECK_THAT(r.err, !Catch::Contains("vulkan error"));
+  std::istringstream lines(r.out);
+  std::set<std::string> backends;
+  for (std::string line; std::getline(lines, line);) {
+    auto j = nlohmann::json::parse(line);
+    CHECK(j["bench"] == "luminance");
+    CHECK(j["batch"] == 20);
+    CHECK(j["size"] == 16);
+    CHECK(j["images_per_s"].get<double>() > 0);
+    backends.insert(j["backend"].get<std::string>());
+  }
+  CHECK(backends.count("cpu"));
+  CHECK(backends.count("vulkan"));  // lavapipe at least
+}

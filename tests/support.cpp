@@ -1,0 +1,90 @@
+#include "support.h"
+
+#include <algorithm>
+#include <array>
+#include <cstdio>
+#include <fstream>
+#include <random>
+#include <sstream>
+#include <stdexcept>
+#include <sys/wait.h>
+
+namespace uvpress::test {
+
+std::optional<fs::path> shared_dir() {
+  fs::path p = fs::path(UVPRESS_SOURCE_DIR).parent_path() / "shared";
+  if (fs::is_directory(p / "assets")) return p;
+  return std::nullopt;
+}
+
+std::vector<fs::path> shared_assets() {
+  std::vector<fs::path> out;
+  auto dir = shared_dir();
+  if (!dir) return out;
+  for (auto& e : fs::recursive_directory_iterator(*dir / "assets")) {
+    auto ext = e.path().extension();
+    if (ext == ".gltf" || ext == ".glb") out.push_back(e.path());
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+Scratch::Scratch(const std::string& name) {
+  static std::mt19937 rng(std::random_device{}());
+  path_ = fs::path(UVPRESS_BINARY_DIR) / "test-scratch" / (name + "-" + std::to_string(rng()));
+  fs::remove_all(path_);
+  fs::create_directories(path_);
+}
+
+Scratch::~Scratch() {
+  std::error_code ec;
+  fs::remove_all(path_, ec);
+}
+
+std::vector<std::string> Scratch::files() const {
+  std::vector<std::string> out;
+  for (auto& e : fs::directory_iterator(path_)) out.push_back(e.path().filename().string());
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+std::vector<std::string> RunResult::err_lines() const {
+  std::vector<std::string> lines;
+  std::istringstream in(err);
+  for (std::string l; std::getline(in, l);)
+    if (!l.empty()) lines.push_back(l);
+  return lines;
+}
+
+namespace {
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+// Runs a shell command with stdout and stderr captured in files.
+RunResult run_shell(const std::string& command) {
+  Scratch io("run");
+  std::string full = command + " >" + (io / "out").string() + " 2>" + (io / "err").string() + " </dev/null";
+  int status = std::system(full.c_str());
+  RunResult r;
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  r.out = slurp(io / "out");
+  r.err = slurp(io / "err");
+  return r;
+}
+
+}  // namespace
+
+RunResult run_uvpress(const std::string& args) { return run_shell(std::string(UVPRESS_BINARY) + " " + args); }
+
+nlohmann::json validate_gltf(const fs::path& file) {
+  fs::path script = fs::path(UVPRESS_SOURCE_DIR) / "tools" / "validate-gltf.mjs";
+  RunResult r = run_shell("node " + script.string() + " '" + file.string() + "'");
+  if (r.exit_code != 0)
+    throw std::runtime_error("validator did not run on " + file.string() + " (run tools/install-deps.sh): " + r.err);
+  return nlohmann::json::parse(r.out);
+}
+
+}  // namespace uvpress::test

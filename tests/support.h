@@ -1,0 +1,53 @@
+// Test helpers: where the shared assets are, running the uvpress binary and the Khronos
+// validator as a user would, and scratch folders.
+#pragma once
+
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace uvpress::test {
+
+namespace fs = std::filesystem;
+
+// ../shared beside the checkout, when present (tests that need it skip without it).
+std::optional<fs::path> shared_dir();
+// Every .gltf/.glb under shared/assets, sorted.
+std::vector<fs::path> shared_assets();
+
+// A fresh empty folder under the build tree, removed at the end of the test.
+class Scratch {
+ public:
+  explicit Scratch(const std::string& name);
+  ~Scratch();
+  const fs::path& path() const { return path_; }
+  fs::path operator/(const std::string& name) const { return path_ / name; }
+  std::vector<std::string> files() const;  // every entry, hidden temporaries included
+
+ private:
+  fs::path path_;
+};
+
+struct RunResult {
+  int exit_code = -1;
+  std::string out, err;
+  std::vector<std::string> err_lines() const;
+};
+
+// Runs the uvpress binary with `args` (shell words, already quoted as needed).
+RunResult run_uvpress(const std::string& args);
+
+// The Khronos validator's summary of a .gltf/.glb: {"numErrors", "errors": {code: n}}.
+nlohmann::json validate_gltf(const fs::path& file);
+
+}  // namespace uvpress::test
+
+// Catch2 v2 has no SKIP: say why and leave the test case.
+#define UVPRESS_SKIP(why)              \
+  do {                                 \
+    WARN("skipped: " << (why));        \
+    return;                            \
+  } while (0)

@@ -1,0 +1,41 @@
+// Shared by the subcommands of the uvpress CLI: global options, how a command hands its
+// work back to main, and the one place where errors become exit codes.
+#pragma once
+
+#include "engine.h"
+
+#include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
+
+#include <chrono>
+#include <functional>
+#include <memory>
+#include <string>
+
+namespace uvpress::cli {
+
+struct Globals {
+  bool verbose = false;
+  std::string device = "auto";  // --device, else UVPRESS_DEVICE, else auto
+  std::string report;           // --report FILE.json
+  bool validation = false;      // --vulkan-validation, or UVPRESS_VALIDATION=1
+  std::function<int()> action;  // set by the chosen subcommand's callback
+
+  // The engine for --device; prints the choice in verbose mode.
+  std::unique_ptr<engine::Engine> make_engine() const;
+  // Writes `report` atomically when --report was given.
+  void write_report(const nlohmann::ordered_json& report) const;
+  // "-v" stage timing: prints "stage: 12.3 ms" (the time since `since`) on stderr and
+  // restarts `since` for the next stage.
+  void stage(const char* name, std::chrono::steady_clock::time_point& since) const;
+};
+
+void add_info(CLI::App& app, Globals& g);
+void add_copy(CLI::App& app, Globals& g);
+void add_demo(CLI::App& app, Globals& g);
+void add_bench(CLI::App& app, Globals& g);
+
+// "1.2 MB"-style size for summary lines.
+std::string human_bytes(uint64_t bytes);
+
+}  // namespace uvpress::cli

@@ -1,0 +1,95 @@
+// uvpress: makes textured 3-D assets cheaper without making them look worse.
+// Exit codes: 0 ok, 1 runtime or input error (one stderr line: file and reason), 2 usage.
+#include "cli.h"
+
+#include "core/error.h"
+#include "io/atomic_file.h"
+
+#include <cstdio>
+#include <cstdlib>
+
+namespace uvpress::cli {
+
+std::unique_ptr<engine::Engine> Globals::make_engine() const {
+  auto request = engine::parse_device_request(device);
+  if (!request) throw engine::EngineError("--device '" + device + "' is not one of auto, gpu, lavapipe, cpu");
+  engine::EngineOptions options;
+  options.validation = validation;
+  auto e = engine::make_engine(*request, options);
+  if (verbose) {
+    auto d = e->device();
+    std::fprintf(stderr, "device: %s %s (%s)\n", d.backend.c_str(), d.name.c_str(), d.type.c_str());
+  }
+  return e;
+}
+
+void Globals::write_report(const nlohmann::ordered_json& report) const {
+  if (report.empty() || this->report.empty()) return;
+  io::AtomicWriter writer;
+  writer.add(this->report, report.dump(2) + "\n");
+  writer.commit();
+}
+
+void Globals::stage(const char* name, std::chrono::steady_clock::time_point& since) const {
+  auto now = std::chrono::steady_clock::now();
+  if (verbose) std::fprintf(stderr, "%s: %.1f ms\n", name, std::chrono::duration<double, std::milli>(now - since).count());
+  since = now;
+}
+
+std::string human_bytes(uint64_t b) {
+  char buf[32];
+  if (b < 1024) std::snprintf(buf, sizeof buf, "%llu B", (unsigned long long)b);
+  else if (b < 1024 * 1024) std::snprintf(buf, sizeof buf, "%.1f KB", b / 1024.0);
+  else std::snprintf(buf, sizeof buf, "%.1f MB", b / (1024.0 * 1024.0));
+  return buf;
+}
+
+}  // namespace uvpress::cli
+
+int main(int argc, char** argv) {
+  using namespace uvpress;
+  cli::Globals g;
+  if (const char* env = std::getenv("UVPRESS_DEVICE"); env && *env) g.device = env;
+  if (const char* env = std::getenv("UVPRESS_VALIDATION"); env && std::string(env) == "1") g.validation = true;
+
+  CLI::App app{"uvpress: re-parameterizes textured glTF assets so that smaller textures look as good on screen"};
+  app.set_version_flag("--version", std::string("uvpress ") + UVPRESS_VERSION);
+  app.require_subcommand(1);
+  app.fallthrough();  // global options may follow the subcommand
+  app.add_flag("-v,--verbose", g.verbose, "Print the device and stage timings on stderr");
+  app.add_option("--device", g.device, "Compute backend: auto | gpu | lavapipe | cpu (or UVPRESS_DEVICE)")
+      ->check(CLI::IsMember({"auto", "gpu", "lavapipe", "cpu"}));
+  app.add_option("--report", g.report, "Write a JSON report of the run to this file");
+  app.add_flag("--vulkan-validation", g.validation, "Enable the Khronos validation layer (or UVPRESS_VALIDATION=1)");
+  cli::add_info(app, g);
+  cli::add_copy(app, g);
+  cli::add_demo(app, g);
+  cli::add_bench(app, g);
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForVersion& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    std::fprintf(stderr, "uvpress: %s (see uvpress --help)\n", e.what());
+    return 2;
+  }
+  try {
+    if (g.report.size() && uvpress::io::extension_of(g.report) != ".json")
+      throw InputError(g.report, "--report must name a .json file");
+    return g.action ? g.action() : 0;
+  } catch (const InputError& e) {
+    std::fprintf(stderr, "uvpress: %s: %s\n", e.file().c_str(), e.what());
+  } catch (const engine::EngineError& e) {
+    std::fprintf(stderr, "uvpress: device: %s\n", e.what());
+  } catch (const std::bad_alloc&) {
+    std::fprintf(stderr, "uvpress: out of memory\n");
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "uvpress: internal error: %s\n", e.what());
+  }
+  return 1;
+}
