@@ -1,0 +1,23 @@
+// The `uvpress bench` family: each benchmark prints one JSON line per configuration on
+// stdout (figures, device, sizes) and compares variants as ratios within one run.
+#pragma once
+
+#include "cli.h"
+
+#include <string>
+#include <vector>
+
+namespace uvpress::cli {
+
+struct Backend {
+  std::string label;  // "cpu" or "vulkan"
+  std::unique_ptr<engine::Engine> engine;
+};
+
+// Every backend this machine has: the native CPU one, then each Vulkan kind present.
+std::vector<Backend> available_backends(bool validation);
+
+// One file per benchmark; each adds its subcommand under `bench`.
+void add_bench_luminance(CLI::App& bench, Globals& g);
+
+}  // namespace uvpress::cli
