@@ -24,6 +24,7 @@ void add_bench(CLI::App& app, Globals& g) {
   auto* bench = app.add_subcommand("bench", "Benchmarks: one JSON line per configuration on stdout");
   bench->require_subcommand(1);
   add_bench_luminance(*bench, g);
+  add_bench_flatten(*bench, g);
 }
 
 }  // namespace uvpress::cli

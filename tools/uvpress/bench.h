@@ -19,5 +19,6 @@ std::vector<Backend> available_backends(bool validation);
 
 // One file per benchmark; each adds its subcommand under `bench`.
 void add_bench_luminance(CLI::App& bench, Globals& g);
+void add_bench_flatten(CLI::App& bench, Globals& g);
 
 }  // namespace uvpress::cli

@@ -65,6 +65,7 @@ int main(int argc, char** argv) {
   cli::add_copy(app, g);
   cli::add_demo(app, g);
   cli::add_bench(app, g);
+  cli::add_flatten(app, g);
 
   try {
     app.parse(argc, argv);

@@ -1,0 +1,202 @@
+// The driver: Algorithm 1 of the paper with the practical rules of §3.5-3.6, and the
+// competitors it is compared with, on one code path.
+//
+//   progressive loop (Progressive, P-CM): while fewer than 99% of the triangles have
+//     D(f_i, f_i^p) <= K, e_n >= 1e-2 and t_com < 0.999: t_com (eq. 10), references
+//     (eq. 6), one step of problem (4) with uniform weights 1/N_f.
+//   final phase: problem (5) with the ideal references and area weights until
+//     e_n < 1e-6 or |grad E| < 1e-6 (or max_iterations).
+//   solver: SLIM while fewer than 99% of the triangles have D <= K and e_n >= 0.1
+//     (Progressive, Hybrid; once switched, CM stays); CM throughout for CM and P-CM; SLIM
+//     throughout for SLIM.
+// e_n (eq. 11) is the relative change of the true energy E(M, M^p), 1000 before the first
+// iteration. The mesh is scaled to area 1, so E = E/|M| = the paper's E_c at convergence.
+#include "flatten/flatten.h"
+
+#include "flatten/disk_topology.h"
+#include "flatten/progressive.h"
+#include "flatten/solver.h"
+#include "flatten/symmetric_dirichlet.h"
+#include "flatten/tutte.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+namespace uvpress::flatten {
+
+const char* to_string(Method m) {
+  switch (m) {
+    case Method::Progressive: return "progressive";
+    case Method::Slim: return "slim";
+    case Method::Cm: return "cm";
+    case Method::PCm: return "p-cm";
+    case Method::Hybrid: return "hybrid";
+  }
+  return "?";
+}
+
+std::optional<Method> parse_method(const std::string& name) {
+  for (Method m : all_methods())
+    if (name == to_string(m)) return m;
+  return std::nullopt;
+}
+
+std::vector<Method> all_methods() { return {Method::Progressive, Method::Slim, Method::Cm, Method::PCm, Method::Hybrid}; }
+
+size_t count_flips(const std::vector<uint32_t>& tris, const std::vector<double>& uv) {
+  size_t flips = 0;
+  for (size_t t = 0; t < tris.size() / 3; ++t) {
+    const double* a = &uv[2 * size_t(tris[3 * t])];
+    const double* b = &uv[2 * size_t(tris[3 * t + 1])];
+    const double* c = &uv[2 * size_t(tris[3 * t + 2])];
+    const double det = (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
+    flips += !(det > 0);
+  }
+  return flips;
+}
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+// The true distortion of every triangle (relative to the ideal references).
+struct Analysis {
+  double energy = 0, max_distortion = 0, fraction_bounded = 0;
+  std::vector<double> J, D;  // 4 and 1 per triangle
+};
+
+void analyze(const Problem& p, const std::vector<double>& uv, const std::vector<double>& weights, double K,
+             Analysis& a) {
+  const long nt = long(p.triangle_count());
+  a.J.resize(4 * size_t(nt));
+  a.D.resize(size_t(nt));
+  std::vector<double> e(static_cast<size_t>(nt));
+  double max_d = 0;
+  long bounded = 0;
+#pragma omp parallel for schedule(static) if (worth_threads(nt)) reduction(max : max_d) reduction(+ : bounded)
+  for (long t = 0; t < nt; ++t) {
+    double* J = &a.J[4 * size_t(t)];
+    jacobian(&p.ideal[4 * size_t(t)], uv.data(), &p.triangles[3 * size_t(t)], J);
+    const double d = distortion(J);
+    a.D[size_t(t)] = d;
+    e[size_t(t)] = weights[size_t(t)] * d;
+    max_d = std::max(max_d, d);
+    bounded += d <= K;
+  }
+  a.energy = fixed_order_sum(size_t(nt), e.data());
+  a.max_distortion = max_d;
+  a.fraction_bounded = double(bounded) / double(nt);
+}
+
+}  // namespace
+
+Result flatten(const Mesh& mesh, const Options& o) {
+  const auto start = Clock::now();
+  for (double x : mesh.positions)
+    if (!std::isfinite(x)) throw FlattenError("non-finite vertex coordinate");
+  DiskTopology topo = check_disk(mesh.triangles, mesh.vertex_count());
+  std::vector<double> positions(3 * topo.used_vertices.size());
+  for (size_t i = 0; i < topo.used_vertices.size(); ++i)
+    for (int k = 0; k < 3; ++k) positions[3 * i + size_t(k)] = mesh.positions[3 * size_t(topo.used_vertices[i]) + size_t(k)];
+  const Problem p = make_problem(positions, topo.triangles);
+  const size_t nt = p.triangle_count();
+
+  std::vector<double> uv = tutte_embedding(p.vertex_count, p.triangles, topo.boundary, 1.0);
+  if (size_t bad = count_flips(p.triangles, uv))
+    throw FlattenError("the Tutte embedding degenerates " + std::to_string(bad) +
+                       " triangles in floating point (the mesh is too irregular)");
+  const std::vector<double> area_w = area_weights(p);
+  const std::vector<double> uniform_w(nt, 1.0 / double(nt));
+  Solver solver(p);
+
+  Result r;
+  r.degenerate_references = p.degenerate;
+  Analysis a;
+  analyze(p, uv, area_w, o.K, a);
+  r.initial_energy = a.energy;
+  const auto iterations_start = Clock::now();
+  r.init_seconds = std::chrono::duration<double>(iterations_start - start).count();
+
+  const bool progressive = o.method == Method::Progressive || o.method == Method::PCm;
+  bool in_progressive = progressive;
+  bool slim = o.method == Method::Slim || o.method == Method::Progressive || o.method == Method::Hybrid;
+  double e_n = 1000;
+  std::vector<double> ref;
+  r.stop_reason = "max iterations";
+  for (int it = 1; it <= o.max_iterations; ++it) {
+    auto clock = Clock::now();
+    double t_com = 1;
+    if (in_progressive) {
+      t_com = common_parameter(a.J, a.D, o.K);
+      if (a.fraction_bounded >= 0.99 || e_n < 1e-2 || t_com >= 0.999) in_progressive = false;
+    }
+    if (slim && o.method != Method::Slim && (a.fraction_bounded >= 0.99 || e_n < 0.1)) slim = false;
+    if (in_progressive) progressive_references(p.ideal, a.J, t_com, ref);
+    else t_com = 1;
+    const double t_reference = std::chrono::duration<double>(Clock::now() - clock).count();
+
+    StepStats s = solver.step(uv, in_progressive ? ref : p.ideal, in_progressive ? uniform_w : area_w,
+                              slim ? Proxy::Slim : Proxy::Cm, in_progressive ? 0.0 : o.gradient_tolerance);
+    if (s.below_gradient_tolerance) {
+      r.converged = true, r.stop_reason = "gradient norm";
+      break;
+    }
+    if (s.line_search_failed) {
+      if (in_progressive) {  // the references gave nothing more: go on with problem (5)
+        in_progressive = false;
+        --it;
+        continue;
+      }
+      // No decrease along a descent direction: the energy is at its floating-point floor.
+      r.converged = true, r.stop_reason = "line search";
+      break;
+    }
+    auto t_analyze = Clock::now();
+    const double before = a.energy;
+    analyze(p, uv, area_w, o.K, a);
+    e_n = std::abs(before - a.energy) / a.energy;
+
+    IterationRecord rec;
+    rec.iteration = it;
+    rec.phase = in_progressive ? (slim ? "p-slim" : "p-cm") : (slim ? "slim" : "cm");
+    rec.energy = a.energy;
+    rec.relative_change = e_n;
+    rec.max_distortion = a.max_distortion;
+    rec.fraction_bounded = a.fraction_bounded;
+    rec.t_com = t_com;
+    rec.step = s.step, rec.max_step = s.max_step;
+    rec.gradient_norm = s.gradient_norm;
+    rec.t_gradient = s.t_gradient + t_reference + std::chrono::duration<double>(Clock::now() - t_analyze).count();
+    rec.t_assembly = s.t_assembly, rec.t_factorization = s.t_factorization, rec.t_solve = s.t_solve;
+    rec.t_line_search = s.t_line_search;
+    rec.t_total = std::chrono::duration<double>(Clock::now() - clock).count();
+    r.log.push_back(rec);
+    r.iterations = it;
+    if (o.on_iteration) o.on_iteration(rec);
+    if (!in_progressive && e_n < o.relative_tolerance) {
+      r.converged = true, r.stop_reason = "relative change";
+      break;
+    }
+  }
+  r.seconds = std::chrono::duration<double>(Clock::now() - iterations_start).count();
+  r.energy = a.energy;
+  r.max_distortion = a.max_distortion;
+  r.eta = r.iterations;
+  for (const auto& rec : r.log)
+    if ((rec.energy - r.energy) / r.energy <= o.eta_epsilon) {
+      r.eta = rec.iteration;
+      break;
+    }
+
+  // Back to the input numbering and scale (UV area = 3-D area).
+  r.uv.assign(2 * mesh.vertex_count(), 0.0);
+  for (size_t i = 0; i < topo.used_vertices.size(); ++i) {
+    r.uv[2 * size_t(topo.used_vertices[i])] = uv[2 * i] / p.scale;
+    r.uv[2 * size_t(topo.used_vertices[i]) + 1] = uv[2 * i + 1] / p.scale;
+  }
+  r.flips = count_flips(mesh.triangles, r.uv);
+  return r;
+}
+
+}  // namespace uvpress::flatten

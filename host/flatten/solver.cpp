@@ -1,0 +1,122 @@
+#include "flatten/solver.h"
+
+#include "flatten/composite_majorization.h"
+#include "flatten/line_search.h"
+#include "flatten/slim.h"
+
+#include <chrono>
+#include <cmath>
+
+namespace uvpress::flatten {
+
+namespace {
+using Clock = std::chrono::steady_clock;
+double since(Clock::time_point& t) {
+  auto now = Clock::now();
+  double s = std::chrono::duration<double>(now - t).count();
+  t = now;
+  return s;
+}
+}  // namespace
+
+Solver::Solver(const Problem& problem) : p_(problem), system_(problem.vertex_count, problem.triangles) {}
+
+double Solver::energy(const std::vector<double>& uv, const std::vector<double>& ref, const std::vector<double>& w) {
+  const long nt = long(p_.triangle_count());
+  per_triangle_.resize(size_t(nt));
+#pragma omp parallel for schedule(static) if (worth_threads(nt))
+  for (long t = 0; t < nt; ++t) {
+    double J[4];
+    jacobian(&ref[4 * size_t(t)], uv.data(), &p_.triangles[3 * size_t(t)], J);
+    per_triangle_[size_t(t)] = w[size_t(t)] * distortion(J);
+  }
+  return fixed_order_sum(size_t(nt), per_triangle_.data());
+}
+
+void Solver::gradient(const std::vector<double>& uv, const std::vector<double>& ref, const std::vector<double>& w,
+                      std::vector<double>& grad) {
+  const long nt = long(p_.triangle_count());
+  grad6_.resize(6 * size_t(nt));
+#pragma omp parallel for schedule(static) if (worth_threads(nt))
+  for (long t = 0; t < nt; ++t) {
+    double J[4], G[4];
+    const double* R = &ref[4 * size_t(t)];
+    jacobian(R, uv.data(), &p_.triangles[3 * size_t(t)], J);
+    distortion_gradient(J, G);
+    triangle_gradient(R, G, w[size_t(t)], &grad6_[6 * size_t(t)]);
+  }
+  system_.gather_gradient(grad6_, grad);
+}
+
+StepStats Solver::step(std::vector<double>& uv, const std::vector<double>& ref, const std::vector<double>& w,
+                       Proxy proxy, double gradient_tolerance) {
+  StepStats s;
+  auto clock = Clock::now();
+  const long nt = long(p_.triangle_count());
+  grad6_.resize(6 * size_t(nt));
+  hess21_.resize(21 * size_t(nt));
+  per_triangle_.resize(size_t(nt));
+  // Local pass: energy, gradient, Hessian proxy per triangle.
+#pragma omp parallel for schedule(static) if (worth_threads(nt))
+  for (long t = 0; t < nt; ++t) {
+    double J[4], G[4];
+    const double* R = &ref[4 * size_t(t)];
+    jacobian(R, uv.data(), &p_.triangles[3 * size_t(t)], J);
+    per_triangle_[size_t(t)] = w[size_t(t)] * distortion(J);
+    distortion_gradient(J, G);
+    triangle_gradient(R, G, w[size_t(t)], &grad6_[6 * size_t(t)]);
+  }
+  s.energy_before = fixed_order_sum(size_t(nt), per_triangle_.data());
+  system_.gather_gradient(grad6_, grad_);
+  double gg = 0;
+  for (double g : grad_) gg += g * g;
+  s.gradient_norm = std::sqrt(gg);
+  s.t_gradient = since(clock);
+  if (s.gradient_norm < gradient_tolerance) {
+    s.below_gradient_tolerance = true;
+    s.energy_after = s.energy_before;
+    return s;
+  }
+
+#pragma omp parallel for schedule(static) if (worth_threads(nt))
+  for (long t = 0; t < nt; ++t) {
+    double J[4], K[16];
+    const double* R = &ref[4 * size_t(t)];
+    jacobian(R, uv.data(), &p_.triangles[3 * size_t(t)], J);
+    if (proxy == Proxy::Slim) slim_hessian(J, K);
+    else cm_hessian(J, K);
+    local_hessian(R, K, w[size_t(t)], &hess21_[21 * size_t(t)]);
+  }
+  system_.assemble(hess21_);
+  s.t_assembly = since(clock);
+
+  if (!system_.factorize()) {
+    s.t_factorization = since(clock);
+    s.line_search_failed = true;
+    s.energy_after = s.energy_before;
+    return s;
+  }
+  s.t_factorization = since(clock);
+  system_.solve(grad_, dir_);
+  s.t_solve = since(clock);
+
+  double slope = 0;
+  for (size_t i = 0; i < dir_.size(); ++i) slope += grad_[i] * dir_[i];
+  s.max_step = max_injective_step(p_.triangles, uv, dir_);
+  if (!(slope < 0)) {  // not a descent direction (cannot happen with an SPD proxy)
+    s.line_search_failed = true;
+    s.energy_after = s.energy_before;
+    s.t_line_search = since(clock);
+    return s;
+  }
+  const double a0 = std::min(1.0, 0.9 * s.max_step);
+  auto ls = armijo(uv, dir_, s.energy_before, slope, a0,
+                   [&](const std::vector<double>& x) { return energy(x, ref, w); });
+  s.step = ls.step;
+  s.energy_after = ls.energy;
+  s.line_search_failed = ls.step == 0;
+  s.t_line_search = since(clock);
+  return s;
+}
+
+}  // namespace uvpress::flatten

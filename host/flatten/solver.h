@@ -1,0 +1,48 @@
+// One descent step of the symmetric Dirichlet objective sum_i w_i D(P_i Rinv_i) - problem
+// (4) with progressive references and uniform weights, or problem (5) with the ideal
+// references and area weights - by SLIM or CM: per-triangle gradient and 4x4 Hessian
+// proxy (OpenMP, static schedule), gather into the fixed sparse pattern, CHOLMOD numeric
+// factorization and solve, then the flip-free line search. Paper §3.5-3.6: one step per
+// reference update; the iteration count N_c is the number of linear solves.
+#pragma once
+
+#include "flatten/sparse_system.h"
+#include "flatten/symmetric_dirichlet.h"
+
+#include <vector>
+
+namespace uvpress::flatten {
+
+enum class Proxy { Slim, Cm };
+
+struct StepStats {
+  double energy_before = 0, energy_after = 0;
+  double gradient_norm = 0;
+  double step = 0, max_step = 0;
+  bool below_gradient_tolerance = false;  // no step taken
+  bool line_search_failed = false;        // direction gave no Armijo decrease
+  double t_gradient = 0, t_assembly = 0, t_factorization = 0, t_solve = 0, t_line_search = 0;
+};
+
+class Solver {
+ public:
+  explicit Solver(const Problem& problem);
+
+  // Objective at uv (+inf when a triangle is inverted or degenerate).
+  double energy(const std::vector<double>& uv, const std::vector<double>& ref, const std::vector<double>& w);
+  // Gradient of the objective (2 per vertex), for tests.
+  void gradient(const std::vector<double>& uv, const std::vector<double>& ref, const std::vector<double>& w,
+                std::vector<double>& grad);
+  // One iteration: moves uv (never through an inversion).
+  StepStats step(std::vector<double>& uv, const std::vector<double>& ref, const std::vector<double>& w, Proxy proxy,
+                 double gradient_tolerance);
+
+  size_t nonzeros() const { return system_.nonzeros(); }
+
+ private:
+  const Problem& p_;
+  SparseSystem system_;
+  std::vector<double> per_triangle_, grad6_, hess21_, grad_, dir_;
+};
+
+}  // namespace uvpress::flatten

@@ -1,0 +1,136 @@
+#include "flatten/sparse_system.h"
+
+#include "flatten/symmetric_dirichlet.h"
+
+#include <algorithm>
+
+namespace uvpress::flatten {
+
+namespace {
+// Row-major lower triangle of a 6x6: index of (a, b), a >= b.
+constexpr int lower_index(int a, int b) { return a * (a + 1) / 2 + b; }
+}  // namespace
+
+SparseSystem::SparseSystem(size_t nv, const std::vector<uint32_t>& tris) : n_(2 * nv) {
+  const size_t nt = tris.size() / 3;
+  // Pattern: every (vertex, vertex) pair of every triangle, 2x2 blocks, lower triangle.
+  std::vector<Eigen::Triplet<double>> triplets;
+  triplets.reserve(nt * 21);
+  for (size_t t = 0; t < nt; ++t)
+    for (int a = 0; a < 6; ++a)
+      for (int b = 0; b <= a; ++b) {
+        const long ga = 2 * long(tris[3 * t + size_t(a / 2)]) + a % 2, gb = 2 * long(tris[3 * t + size_t(b / 2)]) + b % 2;
+        triplets.emplace_back(std::max(ga, gb), std::min(ga, gb), 1.0);
+      }
+  for (size_t i = 0; i < n_; ++i) triplets.emplace_back(long(i), long(i), 1.0);  // whole diagonal
+  matrix_.resize(long(n_), long(n_));
+  matrix_.setFromTriplets(triplets.begin(), triplets.end());
+  matrix_.makeCompressed();
+  triplets.clear();
+  triplets.shrink_to_fit();
+
+  // Gather lists: for each nonzero, which hess21 entries add into it (triangle order).
+  const auto* outer = matrix_.outerIndexPtr();
+  const auto* inner = matrix_.innerIndexPtr();
+  auto position = [&](long row, long col) {  // row >= col
+    const auto* begin = inner + outer[col];
+    const auto* end = inner + outer[col + 1];
+    return uint32_t(std::lower_bound(begin, end, int(row)) - inner);
+  };
+  const size_t nnz = size_t(matrix_.nonZeros());
+  std::vector<uint32_t> target(nt * 21);
+  gather_start_.assign(nnz + 1, 0);
+  for (size_t t = 0; t < nt; ++t)
+    for (int a = 0; a < 6; ++a)
+      for (int b = 0; b <= a; ++b) {
+        const long ga = 2 * long(tris[3 * t + size_t(a / 2)]) + a % 2, gb = 2 * long(tris[3 * t + size_t(b / 2)]) + b % 2;
+        const uint32_t k = position(std::max(ga, gb), std::min(ga, gb));
+        target[21 * t + size_t(lower_index(a, b))] = k;
+        ++gather_start_[k + 1];
+      }
+  for (size_t k = 0; k < nnz; ++k) gather_start_[k + 1] += gather_start_[k];
+  gather_.resize(nt * 21);
+  {
+    std::vector<uint32_t> fill(gather_start_.begin(), gather_start_.end() - 1);
+    for (size_t e = 0; e < nt * 21; ++e) gather_[fill[target[e]]++] = uint32_t(e);
+  }
+  // Entries in the rows or columns of the pinned dofs 0 and 1.
+  for (long col = 0; col < long(n_); ++col)
+    for (long k = outer[col]; k < outer[col + 1]; ++k)
+      if (col <= 1 || inner[k] <= 1) pinned_entries_.push_back(uint32_t(k));
+
+  vertex_start_.assign(nv + 1, 0);
+  for (uint32_t v : tris) ++vertex_start_[v + 1];
+  for (size_t v = 0; v < nv; ++v) vertex_start_[v + 1] += vertex_start_[v];
+  vertex_corner_.resize(tris.size());
+  {
+    std::vector<uint32_t> fill(vertex_start_.begin(), vertex_start_.end() - 1);
+    for (size_t c = 0; c < tris.size(); ++c) vertex_corner_[fill[tris[c]]++] = uint32_t(c);
+  }
+
+  solver_.analyzePattern(matrix_);
+}
+
+void SparseSystem::assemble(const std::vector<double>& hess21) {
+  double* values = matrix_.valuePtr();
+  const long nnz = long(matrix_.nonZeros());
+#pragma omp parallel for schedule(static) if (worth_threads(nnz))
+  for (long k = 0; k < nnz; ++k) {
+    double s = 0;
+    for (uint32_t e = gather_start_[size_t(k)]; e < gather_start_[size_t(k) + 1]; ++e) s += hess21[gather_[e]];
+    values[k] = s;
+  }
+  // Mean diagonal (fixed order), then pin dofs 0 and 1.
+  const auto* outer = matrix_.outerIndexPtr();
+  double sum = 0;
+  for (size_t col = 0; col < n_; ++col) sum += values[outer[col]];  // first entry of a column is its diagonal
+  diagonal_mean_ = sum > 0 ? sum / double(n_) : 1.0;
+  for (uint32_t k : pinned_entries_) values[k] = 0;
+  values[outer[0]] = diagonal_mean_;
+  values[outer[1]] = diagonal_mean_;
+}
+
+void SparseSystem::gather_gradient(const std::vector<double>& grad6, std::vector<double>& grad) const {
+  const long nv = long(vertex_start_.size() - 1);
+  grad.assign(2 * size_t(nv), 0.0);
+#pragma omp parallel for schedule(static) if (worth_threads(nv))
+  for (long v = 0; v < nv; ++v) {
+    double gu = 0, gv = 0;
+    for (uint32_t i = vertex_start_[size_t(v)]; i < vertex_start_[size_t(v) + 1]; ++i) {
+      const uint32_t c = vertex_corner_[i];
+      const size_t t = c / 3, corner = c % 3;
+      gu += grad6[6 * t + 2 * corner], gv += grad6[6 * t + 2 * corner + 1];
+    }
+    grad[2 * size_t(v)] = gu, grad[2 * size_t(v) + 1] = gv;
+  }
+}
+
+bool SparseSystem::factorize() {
+  solver_.setShift(1e-10 * diagonal_mean_);
+  solver_.factorize(matrix_);
+  return solver_.info() == Eigen::Success;
+}
+
+void SparseSystem::solve(const std::vector<double>& grad, std::vector<double>& d) {
+  Eigen::VectorXd rhs(static_cast<Eigen::Index>(n_));
+  for (size_t i = 0; i < n_; ++i) rhs[long(i)] = -grad[i];
+  rhs[0] = rhs[1] = 0;
+  Eigen::VectorXd x = solver_.solve(rhs);
+  d.assign(x.data(), x.data() + n_);
+}
+
+void local_hessian(const double* Rinv, const double K[16], double w, double h[21]) {
+  const double c[3][2] = {{-(Rinv[0] + Rinv[2]), -(Rinv[1] + Rinv[3])}, {Rinv[0], Rinv[1]}, {Rinv[2], Rinv[3]}};
+  // T[(r,j)][(n,s)] = sum_k K[(r,j),(s,k)] c[n][k]
+  double T[4][6];
+  for (int rj = 0; rj < 4; ++rj)
+    for (int n = 0; n < 3; ++n)
+      for (int s = 0; s < 2; ++s) T[rj][2 * n + s] = K[4 * rj + 2 * s] * c[n][0] + K[4 * rj + 2 * s + 1] * c[n][1];
+  for (int a = 0; a < 6; ++a) {
+    const int m = a / 2, r = a % 2;
+    for (int b = 0; b <= a; ++b)
+      h[lower_index(a, b)] = w * (c[m][0] * T[2 * r][b] + c[m][1] * T[2 * r + 1][b]);
+  }
+}
+
+}  // namespace uvpress::flatten

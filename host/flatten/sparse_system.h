@@ -1,0 +1,60 @@
+// The 2V x 2V linear system of one SLIM or CM step, H d = -grad E, u and v coupled
+// (dof 2i = u_i, 2i+1 = v_i). The sparsity pattern depends on the connectivity only, so it
+// is built, and CHOLMOD's symbolic analysis (ordering, supernodes) done, once per mesh;
+// every iteration then assembles values into the fixed pattern and refactorizes
+// numerically (supernodal LLT on OpenBLAS).
+//
+// Assembly is a gather, not a scatter: for every stored nonzero, the list of per-triangle
+// Hessian entries that add into it, in triangle order. Parallel over nonzeros, and the
+// sums come out bit-identical whatever the thread count. Same for the gradient, per vertex.
+//
+// Translation null space: E is invariant under translating all UVs, so H has the two
+// translations in its kernel (and grad E is orthogonal to them). Vertex 0 is pinned: its
+// two rows and columns are replaced by the identity (scaled to the mean diagonal) and its
+// right-hand side by 0. The solution of the pinned system is the minimum of the quadratic
+// model among steps that leave vertex 0 in place - exactly the unpinned solution up to a
+// translation, so the step is unchanged. A diagonal shift of 1e-10 x the mean diagonal on
+// top guards against other (numerically) singular modes of the CM proxy, where dropping
+// the alpha term can leave a triangle's rotation direction without curvature.
+#pragma once
+
+#include <Eigen/CholmodSupport>
+#include <Eigen/Sparse>
+
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+namespace uvpress::flatten {
+
+class SparseSystem {
+ public:
+  SparseSystem(size_t vertex_count, const std::vector<uint32_t>& triangles);
+
+  // hess21[21 t + k]: lower triangle of triangle t's 6x6 Hessian (local dofs u0 v0 u1 v1
+  // u2 v2), row-major: (0,0) (1,0) (1,1) (2,0) ... (5,5).
+  void assemble(const std::vector<double>& hess21);
+  // grad6[6 t + k] -> grad (2V), fixed order.
+  void gather_gradient(const std::vector<double>& grad6, std::vector<double>& grad) const;
+  // Numeric factorization of the assembled matrix. Returns false when CHOLMOD fails.
+  bool factorize();
+  // Solves H d = -grad with vertex 0 pinned.
+  void solve(const std::vector<double>& grad, std::vector<double>& d);
+
+  size_t nonzeros() const { return size_t(matrix_.nonZeros()); }
+
+ private:
+  size_t n_;  // dofs
+  Eigen::SparseMatrix<double> matrix_;  // lower triangle, column-major
+  std::vector<uint32_t> gather_start_, gather_;         // per nonzero: hess21 indices
+  std::vector<uint32_t> vertex_start_, vertex_corner_;  // per vertex: 3 t + corner
+  std::vector<uint32_t> pinned_entries_;  // nonzeros in the rows/columns of dofs 0 and 1
+  Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Lower> solver_;
+  double diagonal_mean_ = 1;
+};
+
+// Local 6x6 Hessian from a 4x4 Hessian K in vec(J) = (J00 J01 J10 J11) and Rinv:
+// H[(m,r),(n,s)] = sum_jk c[m][j] K[(r,j),(s,k)] c[n][k], scaled by w. Writes 21 entries.
+void local_hessian(const double* Rinv, const double K[16], double w, double h21[21]);
+
+}  // namespace uvpress::flatten

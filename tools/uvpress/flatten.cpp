@@ -1,0 +1,370 @@
+// uvpress flatten IN -o OUT: foldover-free, low-distortion UVs for a disk-topology mesh by
+// the progressive method (or one of its competitors, --method). IN is an OBJ/OFF disk
+// mesh, or a glTF asset whose primitives are flattened chart by chart (charts from
+// TEXCOORD_0 seams; a primitive without UVs is one chart per connected component). OUT is
+// an OBJ with `vt` (the input's own UVs replaced), or a glTF with a new TEXCOORD set on
+// every primitive (existing sets untouched). UVs are scaled uniformly into [0,1] (charts
+// of a glTF laid out side by side on shelves at one common scale); the tool counts
+// flipped triangles on the values as written.
+#include "cli.h"
+
+#include "atlas/charts.h"
+#include "core/error.h"
+#include "flatten/flatten.h"
+#include "flatten/report.h"
+#include "io/asset.h"
+#include "io/atomic_file.h"
+#include "io/gltf_io.h"
+#include "io/mesh_io.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <numeric>
+
+namespace uvpress::cli {
+
+namespace {
+
+struct Chart {
+  std::string label;
+  Mesh mesh;                         // positions + triangles of the chart
+  flatten::Result result;
+};
+
+// Uniformly scales and translates 2-D points (2 per vertex) into [0,1]^2.
+void normalize_unit_square(std::vector<double>& uv) {
+  if (uv.empty()) return;
+  double lo[2] = {1e300, 1e300}, hi[2] = {-1e300, -1e300};
+  for (size_t i = 0; i < uv.size(); ++i) lo[i % 2] = std::min(lo[i % 2], uv[i]), hi[i % 2] = std::max(hi[i % 2], uv[i]);
+  const double extent = std::max(hi[0] - lo[0], hi[1] - lo[1]);
+  const double s = extent > 0 ? 1 / extent : 1;
+  for (size_t i = 0; i < uv.size(); ++i) uv[i] = (uv[i] - lo[i % 2]) * s;
+}
+
+// The value an OBJ reader gets back from "%.9g".
+double as_written_obj(double x) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.9g", x);
+  return std::strtod(buf, nullptr);
+}
+
+flatten::Result run_chart(const Mesh& mesh, const flatten::Options& o, const std::string& file, const std::string& what) {
+  try {
+    return flatten::flatten(mesh, o);
+  } catch (const flatten::FlattenError& e) {
+    throw InputError(file, what + e.what());
+  }
+}
+
+// Charts of one glTF primitive, as disk meshes indexed by welded UV vertex.
+struct PrimitiveCharts {
+  Mesh welded;                         // weld_uv_mesh output (uv_triangles = chart vertex ids)
+  atlas::Charts charts;
+  std::vector<std::vector<uint32_t>> vertex_of;  // per chart: local vertex -> welded UV vertex
+};
+
+PrimitiveCharts split_primitive(const io::Primitive& prim) {
+  PrimitiveCharts pc;
+  std::vector<float> zero_uv;
+  const float* uv = nullptr;
+  if (!prim.uv_sets.empty() && prim.uv_sets[0].uv.size() == 2 * prim.vertex_count()) {
+    uv = prim.uv_sets[0].uv.data();
+  } else {
+    zero_uv.assign(2 * prim.vertex_count(), 0.0f);
+    uv = zero_uv.data();
+  }
+  pc.welded = atlas::weld_uv_mesh(prim.positions.data(), uv, prim.vertex_count(), prim.indices.data(),
+                                  prim.indices.size());
+  pc.charts = atlas::find_charts(pc.welded);
+  return pc;
+}
+
+void flatten_gltf(const Globals& g, const std::string& input, const std::string& output, const flatten::Options& o,
+                  std::vector<Chart>& charts, std::chrono::steady_clock::time_point& t0) {
+  io::GltfFile file = io::load_gltf(input);
+  io::Asset asset = io::build_asset(file);
+  g.stage("load", t0);
+  if (asset.primitives.empty()) throw InputError(input, "no triangle primitives to flatten");
+  struct Placed {
+    size_t prim;
+    std::vector<uint32_t> welded_uv_vertex;  // chart-local vertex -> welded UV vertex
+    size_t chart;                            // index into `charts`
+  };
+  std::vector<PrimitiveCharts> split;
+  std::vector<Placed> placed;
+  for (size_t p = 0; p < asset.primitives.size(); ++p) {
+    const auto& prim = asset.primitives[p];
+    split.push_back(split_primitive(prim));
+    const auto& pc = split.back();
+    const size_t nt = pc.welded.triangle_count();
+    for (uint32_t c = 0; c < pc.charts.count; ++c) {
+      Chart chart;
+      chart.label = "mesh " + std::to_string(prim.mesh) + " primitive " + std::to_string(prim.primitive) + " chart " +
+                    std::to_string(c);
+      std::vector<uint32_t> local(pc.welded.uv_count(), UINT32_MAX), back;
+      for (size_t t = 0; t < nt; ++t) {
+        if (pc.charts.chart_of_triangle[t] != c) continue;
+        for (int k = 0; k < 3; ++k) {
+          const uint32_t u = pc.welded.uv_triangles[3 * t + size_t(k)];
+          if (local[u] == UINT32_MAX) {
+            local[u] = uint32_t(back.size());
+            back.push_back(u);
+            const uint32_t pv = pc.welded.triangles[3 * t + size_t(k)];
+            for (int d = 0; d < 3; ++d) chart.mesh.positions.push_back(pc.welded.positions[3 * size_t(pv) + size_t(d)]);
+          }
+          chart.mesh.triangles.push_back(local[u]);
+        }
+      }
+      chart.result = run_chart(chart.mesh, o, input, chart.label + ": ");
+      placed.push_back({p, std::move(back), charts.size()});
+      charts.push_back(std::move(chart));
+    }
+  }
+  g.stage("flatten", t0);
+
+  // Shelf layout at one common scale (UV area = 3-D area), tallest charts first.
+  struct Box {
+    double lo[2], hi[2], x = 0, y = 0;
+  };
+  std::vector<Box> box(charts.size());
+  double total_area = 0;
+  for (size_t c = 0; c < charts.size(); ++c) {
+    Box& b = box[c];
+    b.lo[0] = b.lo[1] = 1e300, b.hi[0] = b.hi[1] = -1e300;
+    const auto& uv = charts[c].result.uv;
+    for (size_t i = 0; i < uv.size(); ++i) b.lo[i % 2] = std::min(b.lo[i % 2], uv[i]), b.hi[i % 2] = std::max(b.hi[i % 2], uv[i]);
+    total_area += (b.hi[0] - b.lo[0]) * (b.hi[1] - b.lo[1]);
+  }
+  std::vector<size_t> order(charts.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) {
+    return box[a].hi[1] - box[a].lo[1] > box[b].hi[1] - box[b].lo[1];
+  });
+  double width = 0;
+  for (const auto& b : box) width = std::max(width, b.hi[0] - b.lo[0]);
+  width = std::max(width, std::sqrt(total_area) * 1.2);
+  const double gutter = 0.01 * std::sqrt(total_area);
+  double x = 0, y = 0, row = 0;
+  for (size_t c : order) {
+    Box& b = box[c];
+    const double w = b.hi[0] - b.lo[0], h = b.hi[1] - b.lo[1];
+    if (x > 0 && x + w > width) x = 0, y += row + gutter, row = 0;
+    b.x = x, b.y = y;
+    x += w + gutter, row = std::max(row, h);
+  }
+  // Per primitive: the new UV of every glTF vertex.
+  std::vector<std::vector<double>> prim_uv(asset.primitives.size());
+  for (size_t p = 0; p < asset.primitives.size(); ++p) prim_uv[p].assign(2 * asset.primitives[p].vertex_count(), 0.0);
+  std::vector<double> all;  // every placed UV, for the common normalization
+  std::vector<std::vector<double>> welded_uv(split.size());
+  for (size_t p = 0; p < split.size(); ++p) welded_uv[p].assign(2 * split[p].welded.uv_count(), 0.0);
+  for (const auto& pl : placed) {
+    const auto& uv = charts[pl.chart].result.uv;
+    const Box& b = box[pl.chart];
+    for (size_t i = 0; i < pl.welded_uv_vertex.size(); ++i) {
+      welded_uv[pl.prim][2 * size_t(pl.welded_uv_vertex[i])] = uv[2 * i] - b.lo[0] + b.x;
+      welded_uv[pl.prim][2 * size_t(pl.welded_uv_vertex[i]) + 1] = uv[2 * i + 1] - b.lo[1] + b.y;
+    }
+  }
+  for (auto& w : welded_uv) all.insert(all.end(), w.begin(), w.end());
+  normalize_unit_square(all);
+  size_t offset = 0;
+  for (auto& w : welded_uv) std::copy(all.begin() + long(offset), all.begin() + long(offset + w.size()), w.begin()), offset += w.size();
+
+  // Write TEXCOORD_n (n = the first unused set) on every primitive, as float32, and count
+  // flips on the float values as written, chart by chart.
+  auto& model = file.model;
+  if (model.buffers.empty()) model.buffers.emplace_back();
+  for (size_t p = 0; p < asset.primitives.size(); ++p) {
+    const auto& prim = asset.primitives[p];
+    const auto& pc = split[p];
+    std::vector<float> uv(2 * prim.vertex_count(), 0.0f);
+    for (size_t i = 0; i < prim.indices.size() / 3 * 3; ++i) {
+      const uint32_t u = pc.welded.uv_triangles[i];
+      uv[2 * size_t(prim.indices[i])] = float(welded_uv[p][2 * size_t(u)]);
+      uv[2 * size_t(prim.indices[i]) + 1] = float(welded_uv[p][2 * size_t(u) + 1]);
+    }
+    for (const auto& pl : placed) {
+      if (pl.prim != p) continue;
+      std::vector<double> written(2 * pl.welded_uv_vertex.size());
+      for (size_t i = 0; i < pl.welded_uv_vertex.size(); ++i)
+        for (int d = 0; d < 2; ++d)
+          written[2 * i + size_t(d)] = double(float(welded_uv[p][2 * size_t(pl.welded_uv_vertex[i]) + size_t(d)]));
+      charts[pl.chart].result.flips = flatten::count_flips(charts[pl.chart].mesh.triangles, written);
+    }
+    auto& buffer = model.buffers[0].data;
+    while (buffer.size() % 4) buffer.push_back(0);
+    tinygltf::BufferView view;
+    view.buffer = 0;
+    view.byteOffset = buffer.size();
+    view.byteLength = uv.size() * sizeof(float);
+    view.target = TINYGLTF_TARGET_ARRAY_BUFFER;
+    const auto* bytes = reinterpret_cast<const uint8_t*>(uv.data());
+    buffer.insert(buffer.end(), bytes, bytes + view.byteLength);
+    model.bufferViews.push_back(view);
+    tinygltf::Accessor acc;
+    acc.bufferView = int(model.bufferViews.size() - 1);
+    acc.componentType = TINYGLTF_COMPONENT_TYPE_FLOAT;
+    acc.type = TINYGLTF_TYPE_VEC2;
+    acc.count = prim.vertex_count();
+    acc.minValues = {1e300, 1e300}, acc.maxValues = {-1e300, -1e300};
+    for (size_t i = 0; i < uv.size(); ++i)
+      acc.minValues[i % 2] = std::min(acc.minValues[i % 2], double(uv[i])),
+      acc.maxValues[i % 2] = std::max(acc.maxValues[i % 2], double(uv[i]));
+    if (uv.empty()) acc.minValues = acc.maxValues = {0, 0};
+    model.accessors.push_back(acc);
+    auto& attributes = model.meshes[size_t(prim.mesh)].primitives[size_t(prim.primitive)].attributes;
+    int n = 0;
+    while (attributes.count("TEXCOORD_" + std::to_string(n))) ++n;
+    attributes["TEXCOORD_" + std::to_string(n)] = int(model.accessors.size() - 1);
+  }
+  size_t flips = 0;
+  for (const auto& c : charts) flips += c.result.flips;
+  if (flips) throw InputError(output, std::to_string(flips) + " flipped triangles in the UVs; nothing written");
+  io::save_gltf(file, output);
+  g.stage("save", t0);
+}
+
+void flatten_mesh(const Globals& g, const std::string& input, const std::string& output, const flatten::Options& o,
+                  std::vector<Chart>& charts, std::chrono::steady_clock::time_point& t0) {
+  Chart chart;
+  chart.mesh = io::read_mesh(input);
+  g.stage("load", t0);
+  chart.result = run_chart(chart.mesh, o, input, "");
+  g.stage("flatten", t0);
+  Mesh out = chart.mesh;
+  out.uvs = chart.result.uv;
+  normalize_unit_square(out.uvs);
+  for (double& x : out.uvs) x = as_written_obj(x);
+  out.uv_triangles = out.triangles;
+  chart.result.flips = flatten::count_flips(out.triangles, out.uvs);
+  if (chart.result.flips)
+    throw InputError(output, std::to_string(chart.result.flips) + " flipped triangles in the UVs; nothing written");
+  io::write_obj(out, output);
+  g.stage("save", t0);
+  charts.push_back(std::move(chart));
+}
+
+}  // namespace
+
+void add_flatten(CLI::App& app, Globals& g) {
+  auto* cmd = app.add_subcommand("flatten", "Foldover-free low-distortion UVs for disk meshes (progressive parameterization)");
+  struct Args {
+    std::string input, output, method = "progressive", log;
+    int max_iterations = 5000;
+    double bound = 60;
+  };
+  auto a = std::make_shared<Args>();
+  cmd->add_option("input", a->input, "Disk mesh (.obj, .off) or glTF asset (.gltf, .glb)")->required();
+  cmd->add_option("-o,--output", a->output, "Output: .obj (with vt), or .gltf/.glb (new TEXCOORD set)")->required();
+  cmd->add_option("--method", a->method, "progressive | slim | cm | p-cm | hybrid")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"progressive", "slim", "cm", "p-cm", "hybrid"}));
+  cmd->add_option("--log", a->log, "Per-iteration log: FILE.csv or FILE.json");
+  cmd->add_option("--max-iter", a->max_iterations, "Iteration limit")->capture_default_str()->check(CLI::Range(1, 1000000));
+  cmd->add_option("--bound", a->bound, "Distortion bound K of the progressive references")
+      ->capture_default_str()
+      ->check(CLI::Range(1.0001, 1e12));
+  cmd->callback([&g, a] {
+    g.action = [&g, a] {
+      auto t0 = std::chrono::steady_clock::now();
+      const std::string in_ext = io::extension_of(a->input), out_ext = io::extension_of(a->output);
+      const bool gltf_in = in_ext == ".gltf" || in_ext == ".glb";
+      if (!gltf_in && in_ext != ".obj" && in_ext != ".off") {
+        io::read_file(a->input);  // a missing file says so first
+        throw InputError(a->input, "unsupported input format '" + in_ext + "' (use .obj, .off, .gltf or .glb)");
+      }
+      if (out_ext != ".obj" && !io::is_gltf_output_path(a->output))
+        throw InputError(a->output, "unsupported output format (use .obj, .gltf or .glb)");
+      if (!gltf_in && out_ext != ".obj")
+        throw InputError(a->output, "an OBJ/OFF input is written as .obj (glTF output needs a glTF input)");
+      if (gltf_in && out_ext == ".obj")
+        throw InputError(a->output, "a glTF input is written as .gltf or .glb");
+      const std::string log_ext = io::extension_of(a->log);
+      if (!a->log.empty() && log_ext != ".csv" && log_ext != ".json")
+        throw InputError(a->log, "--log must name a .csv or .json file");
+
+      flatten::Options o;
+      o.method = *flatten::parse_method(a->method);
+      o.max_iterations = a->max_iterations;
+      o.K = a->bound;
+      if (g.verbose)
+        o.on_iteration = [](const flatten::IterationRecord& r) {
+          std::fprintf(stderr, "iter %3d %-6s E %.9f  e_n %.2e  max D %.4g  D<=K %.4f  t %.4f  step %.3g  %.3f s\n",
+                       r.iteration, r.phase, r.energy, r.relative_change, r.max_distortion, r.fraction_bounded,
+                       r.t_com, r.step, r.t_total);
+        };
+      flatten::reset_peak_rss();
+      std::vector<Chart> charts;
+      if (gltf_in) flatten_gltf(g, a->input, a->output, o, charts, t0);
+      else flatten_mesh(g, a->input, a->output, o, charts, t0);
+
+      if (!a->log.empty()) {
+        std::vector<flatten::LabelledLog> logs;
+        for (const auto& c : charts) logs.push_back({c.label, &c.result.log});
+        io::AtomicWriter w;
+        w.add(a->log, log_ext == ".csv" ? flatten::log_csv(logs) : flatten::log_json(logs));
+        w.commit();
+      }
+
+      // One summary; a glTF's charts are summed (faces, iterations, time, flips), E_c is
+      // area-weighted, eta and N_c are the largest over charts.
+      size_t faces = 0, vertices = 0, flips = 0;
+      double seconds = 0, energy = 0, area = 0;
+      int iterations = 0, most = 0, eta = 0;
+      bool converged = true;
+      for (const auto& c : charts) {
+        faces += c.mesh.triangle_count(), vertices += c.mesh.vertex_count(), flips += c.result.flips;
+        seconds += c.result.seconds, iterations += c.result.iterations;
+        most = std::max(most, c.result.iterations), eta = std::max(eta, c.result.eta);
+        converged = converged && c.result.converged;
+        double a3 = 0;
+        const auto& m = c.mesh;
+        for (size_t t = 0; t < m.triangle_count(); ++t) {
+          const double* p0 = &m.positions[3 * size_t(m.triangles[3 * t])];
+          const double* p1 = &m.positions[3 * size_t(m.triangles[3 * t + 1])];
+          const double* p2 = &m.positions[3 * size_t(m.triangles[3 * t + 2])];
+          double e1[3], e2[3];
+          for (int k = 0; k < 3; ++k) e1[k] = p1[k] - p0[k], e2[k] = p2[k] - p0[k];
+          a3 += 0.5 * std::sqrt(std::pow(e1[1] * e2[2] - e1[2] * e2[1], 2) + std::pow(e1[2] * e2[0] - e1[0] * e2[2], 2) +
+                                std::pow(e1[0] * e2[1] - e1[1] * e2[0], 2));
+        }
+        energy += a3 * c.result.energy, area += a3;
+      }
+      nlohmann::ordered_json report;
+      if (charts.size() == 1) {
+        report = flatten::summary_json(charts[0].result, o.method, faces, vertices);
+      } else {
+        report["method"] = a->method;
+        report["faces"] = faces;
+        report["vertices"] = vertices;
+        report["N_c"] = most;
+        report["eta"] = eta;
+        report["t_c_s"] = seconds;
+        report["E_c"] = area > 0 ? energy / area : 0.0;
+        report["s_per_iter"] = iterations ? seconds / iterations : 0.0;
+        report["flips"] = flips;
+        report["peak_rss_mb"] = flatten::peak_rss_mb();
+        report["converged"] = converged;
+        report["charts"] = nlohmann::ordered_json::array();
+        for (const auto& c : charts) {
+          auto j = flatten::summary_json(c.result, o.method, c.mesh.triangle_count(), c.mesh.vertex_count());
+          j["chart"] = c.label;
+          report["charts"].push_back(j);
+        }
+      }
+      report["input"] = a->input;
+      report["output"] = a->output;
+      std::printf("%s: %zu triangles%s, %s: %d iterations (eta %d), E_c %.6f, %.3f s, %zu flips -> %s\n",
+                  a->input.c_str(), faces, charts.size() > 1 ? (" in " + std::to_string(charts.size()) + " charts").c_str() : "",
+                  a->method.c_str(), charts.size() == 1 ? iterations : most, eta,
+                  report["E_c"].get<double>(), seconds, flips, a->output.c_str());
+      g.write_report(report);
+      return 0;
+    };
+  });
+}
+
+}  // namespace uvpress::cli
