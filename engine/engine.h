@@ -2,6 +2,8 @@
 // backends live. It knows images, views and triangles; nothing about meshes or glTF.
 #pragma once
 
+#include "layout.h"
+
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -54,6 +56,46 @@ struct LuminanceBatch {
   std::vector<float> half;
 };
 
+using shader::ViewCandidate;
+using shader::ViewDesc;
+using shader::ViewTriangle;
+
+// Everything needed to render a set of per-triangle views: the ring triangles in view
+// space and the source texture's luminance (GMSD step 1 applied to the stored values).
+struct ViewSetDesc {
+  uint32_t size = 64;  // S, pixels per side, even, 8 <= S <= 64
+  std::vector<ViewDesc> views;
+  std::vector<ViewTriangle> triangles;
+  const float* texture = nullptr;  // texture_width x texture_height luminance, row 0 on top
+  uint32_t texture_width = 0, texture_height = 0;
+};
+
+// Throws EngineError when a view set breaks the kernels' limits (size, ranges, guard band).
+void check_view_set(const ViewSetDesc& desc);
+
+// Views prepared on an engine: coverage and reference renders, made once and reused by
+// every round of candidates. Opaque; only the engine that made it can use it.
+class ViewSet {
+ public:
+  virtual ~ViewSet() = default;
+  virtual uint32_t size() const = 0;        // S
+  virtual uint32_t view_count() const = 0;
+};
+
+// Per-pixel results, S*S per view or candidate, for tests and debugging.
+struct ViewImages {
+  std::vector<uint8_t> coverage;  // ring triangle index per pixel, shader::kNoTriangle where empty
+  std::vector<float> reference;   // reference render (luminance), 0 where empty
+  std::vector<float> candidate;   // candidate render after the least-squares bake, 0 where empty
+};
+
+// A batch of equal-sized greyscale image pairs, [0,1] luminance, pair after pair.
+struct ImagePairs {
+  uint32_t width = 0, height = 0, count = 0;
+  const float* first = nullptr;   // count * width * height
+  const float* second = nullptr;
+};
+
 class Engine {
  public:
   virtual ~Engine() = default;
@@ -61,6 +103,17 @@ class Engine {
 
   // GMSD steps 1 and 2 (reference/gmsd.md) for every image of the batch.
   virtual LuminanceBatch luminance(const Rgba8Batch& batch) = 0;
+
+  // GMSD (reference/gmsd.md) of every pair; images up to 64 x 64 on Vulkan.
+  virtual std::vector<float> gmsd(const ImagePairs& pairs) = 0;
+
+  // Rasterizes every view (coverage, reference render). Throws EngineError for a view that
+  // breaks the limits in shader/layout.h.
+  virtual std::unique_ptr<ViewSet> prepare_views(const ViewSetDesc& desc) = 0;
+  // GMSD of each candidate's least-squares bake against its view's reference. With
+  // `images`, also returns coverage, reference and candidate renders per candidate.
+  virtual void score_views(ViewSet& views, const ViewCandidate* candidates, size_t count, float* gmsd,
+                           ViewImages* images = nullptr) = 0;
 
   // Validation-layer errors seen so far (always 0 on the CPU backend).
   virtual uint64_t validation_errors() const { return 0; }

@@ -19,9 +19,75 @@ struct ImageBatchPush {
   uint count;   // images in this dispatch
 };
 
+// ---- Per-triangle views (perceptual loss, seed paper 001 section 4.1.1, Appendix A) ----
+//
+// A view is an S x S orthographic render of one triangle and its one-ring. The host gives
+// every ring triangle in view space: screen vertices in pixels (x right, y down; pixel
+// (i, j) has its centre at (i + 0.5, j + 0.5)), and three affine planes over the screen,
+// value(x, y) = c0 + c1 x + c2 y, for depth (larger is nearer the camera) and for the
+// source texel coordinates s, t (texel centres at integers: s = u W - 0.5, t = v H - 0.5).
+struct ViewTriangle {
+  float xy[6];     // x0 y0 x1 y1 x2 y2, pixels; |x|, |y| <= kViewGuardBand
+  float depth[3];  // plane coefficients
+  float s[3];
+  float t[3];
+  float pad;
+};
+
+struct ViewDesc {
+  uint first_triangle;  // into the ViewTriangle array; the view's own triangle comes first
+  uint triangle_count;  // 1 + one-ring, at most kViewMaxTriangles
+  float center_s;       // integer-valued texel coordinates of the view's centre: candidate
+  float center_t;       // Jacobians act on (s, t) - centre, so J = I keeps the texel lattice
+};
+
+// One candidate Jacobian (texel space, row-major: s' = j0 s + j1 t, t' = j2 s + j3 t) for
+// one view. The candidate texture is a tile of texels on the lattice of J-mapped source
+// texel coordinates, fitted by least squares to the view's reference render (eq. 11).
+struct ViewCandidate {
+  float j[4];
+  uint view;
+  uint pad0, pad1, pad2;
+};
+
+// Dispatch over a page of views: `count` items starting at `first`.
+struct ViewPush {
+  uint size;              // S, pixels per side
+  uint first;             // first view (prepare) or candidate (score) of this dispatch
+  uint count;
+  uint texture_width;     // prepare only: the source luminance texture
+  uint texture_height;
+  uint view_base;         // index of the first view held by the bound page
+  uint store_images;      // score only: 1 = write the candidate render for read-back
+  uint pad;
+};
+
+// GMSD of `count` image pairs of width x height each.
+struct GmsdPush {
+  uint width;
+  uint height;
+  uint first;
+  uint count;
+};
+
 #ifdef __cplusplus
+constexpr uint kViewMaxSize = 64;         // S <= 64: GMSD works on a 32 x 32 shared tile
+constexpr uint kViewMaxTriangles = 64;    // 1 + one-ring
+constexpr uint kViewGuardBand = 511;      // |screen coordinate| bound: 4 sub-pixel bits keep edge functions in int32
+constexpr uint kTileMax = 32;             // candidate texture tile, texels per side
+constexpr uint kNoTriangle = 255;         // coverage value of an empty pixel
+static_assert(sizeof(ViewTriangle) == 64, "std430 layout");
+static_assert(sizeof(ViewDesc) == 16, "std430 layout");
+static_assert(sizeof(ViewCandidate) == 32, "std430 layout");
+static_assert(sizeof(ViewPush) == 32, "push constant layout");
 static_assert(sizeof(ImageBatchPush) == 16, "push constant layout");
 }  // namespace uvpress::shader
+#else
+#define kViewMaxSize 64u
+#define kViewMaxTriangles 64u
+#define kViewGuardBand 511u
+#define kTileMax 32u
+#define kNoTriangle 255u
 #endif
 
 #endif

@@ -2,8 +2,12 @@
 // formulas, same summation order, fp32), parallel over images. It is the oracle the Vulkan
 // path is tested against and the fast path on machines without a GPU.
 #include "engine.h"
+#include "gmsd.h"
+#include "views.h"
 
 #include <algorithm>
+#include <cmath>
+#include <string>
 #include <thread>
 
 namespace uvpress::engine {
@@ -51,6 +55,14 @@ void downsample_image(const float* y, uint32_t w, uint32_t h, float* d) {
     }
 }
 
+struct CpuViewSet final : ViewSet {
+  ViewSetDesc desc;  // texture pointer dropped after prepare
+  std::vector<uint8_t> coverage;
+  std::vector<float> reference;
+  uint32_t size() const override { return desc.size; }
+  uint32_t view_count() const override { return uint32_t(desc.views.size()); }
+};
+
 class CpuEngine final : public Engine {
  public:
   explicit CpuEngine(const EngineOptions& o)
@@ -68,6 +80,58 @@ class CpuEngine final : public Engine {
       downsample_image(out.full.data() + k * n, b.width, b.height, out.half.data() + k * n2);
     });
     return out;
+  }
+
+  std::vector<float> gmsd(const ImagePairs& p) override {
+    std::vector<float> out(p.count);
+    const size_t n = size_t(p.width) * p.height;
+    parallel_for(p.count, threads_, [&](uint32_t k) {
+      out[k] = cpu::gmsd<float>(p.first + k * n, p.second + k * n, p.width, p.height);
+    });
+    return out;
+  }
+
+  std::unique_ptr<ViewSet> prepare_views(const ViewSetDesc& d) override {
+    check_view_set(d);
+    auto set = std::make_unique<CpuViewSet>();
+    set->desc = d;
+    set->desc.texture = nullptr;
+    const size_t n = size_t(d.size) * d.size;
+    set->coverage.resize(n * d.views.size());
+    set->reference.resize(n * d.views.size());
+    parallel_for(uint32_t(d.views.size()), threads_, [&](uint32_t v) {
+      cpu::rasterize_view(d.views[v], d.triangles.data(), d.size, d.texture, d.texture_width, d.texture_height,
+                          set->coverage.data() + v * n, set->reference.data() + v * n);
+    });
+    return set;
+  }
+
+  void score_views(ViewSet& views, const ViewCandidate* c, size_t count, float* gmsd, ViewImages* images) override {
+    auto* set = dynamic_cast<CpuViewSet*>(&views);
+    if (!set) throw EngineError("score_views: the view set belongs to another engine");
+    const uint32_t S = set->desc.size;
+    const size_t n = size_t(S) * S;
+    for (size_t k = 0; k < count; ++k)
+      if (c[k].view >= set->view_count()) throw EngineError("score_views: candidate names a view that does not exist");
+    if (images) {
+      images->coverage.resize(n * count), images->reference.resize(n * count), images->candidate.resize(n * count);
+    }
+    parallel_for(uint32_t(count), threads_, [&](uint32_t k) {
+      const uint32_t v = c[k].view;
+      const uint8_t* cov = set->coverage.data() + v * n;
+      const float* ref = set->reference.data() + v * n;
+      float* cand;
+      if (images) {
+        std::copy(cov, cov + n, images->coverage.begin() + long(k * n));
+        std::copy(ref, ref + n, images->reference.begin() + long(k * n));
+        cand = images->candidate.data() + k * n;
+      } else {
+        thread_local std::vector<float> local;
+        local.resize(n);
+        cand = local.data();
+      }
+      gmsd[k] = cpu::score_view(set->desc.views[v], set->desc.triangles.data(), S, cov, ref, c[k].j, cand);
+    });
   }
 
  private:

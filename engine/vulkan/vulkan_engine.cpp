@@ -5,16 +5,45 @@
 #include "layout.h"
 
 #include "downsample2x2.spv.h"
+#include "gmsd.spv.h"
 #include "luminance.spv.h"
+#include "view_prepare.spv.h"
+#include "view_score.spv.h"
 
 #include <algorithm>
 #include <cstring>
 #include <memory>
+#include <string>
+#include <vector>
 
 namespace uvpress::engine {
 namespace {
 
+using shader::GmsdPush;
 using shader::ImageBatchPush;
+using shader::ViewPush;
+
+// Words of view_score.comp's scratch slot per candidate (its OFF_* layout).
+constexpr uint64_t kScoreSlotBytes =
+    4ull * (3 * shader::kViewMaxSize * shader::kViewMaxSize + 15 * shader::kTileMax * shader::kTileMax);
+constexpr uint32_t kScoreChunk = 1024;  // candidates per submit, at most
+constexpr uint32_t kWorkgroup = 256;
+
+// A view set on the device: descriptors and triangles whole, coverage and reference
+// renders in pages of views that each fit one buffer.
+struct VulkanViewSet final : ViewSet {
+  struct Page {
+    uint32_t first, count;
+    std::unique_ptr<vk::Buffer> coverage, reference;
+  };
+  uint32_t size_ = 0;
+  std::vector<ViewDesc> views;
+  std::unique_ptr<vk::Buffer> view_buffer, triangle_buffer;
+  std::vector<Page> pages;
+  uint32_t size() const override { return size_; }
+  uint32_t view_count() const override { return uint32_t(views.size()); }
+};
+
 
 constexpr uint32_t kLocal = 16;  // 16x16 invocations: 256 threads, fine on GPUs and lavapipe
 
@@ -29,6 +58,9 @@ class VulkanEngine final : public Engine {
         luminance_(context_, luminance_spv, sizeof(luminance_spv), 2, sizeof(ImageBatchPush), kLocal, kLocal),
         downsample_(context_, downsample2x2_spv, sizeof(downsample2x2_spv), 2, sizeof(ImageBatchPush), kLocal,
                     kLocal),
+        gmsd_(context_, gmsd_spv, sizeof(gmsd_spv), 3, sizeof(GmsdPush), kWorkgroup, 1),
+        view_prepare_(context_, view_prepare_spv, sizeof(view_prepare_spv), 5, sizeof(ViewPush), kWorkgroup, 1),
+        view_score_(context_, view_score_spv, sizeof(view_score_spv), 7, sizeof(ViewPush), kWorkgroup, 1),
         sequence_(context_) {}
 
   DeviceInfo device() const override { return context_.info(); }
@@ -71,7 +103,123 @@ class VulkanEngine final : public Engine {
     return out;
   }
 
+  std::vector<float> gmsd(const ImagePairs& pairs) override {
+    std::vector<float> out(pairs.count);
+    const uint64_t n = uint64_t(pairs.width) * pairs.height;
+    if (pairs.count == 0 || n == 0) return out;
+    if (pairs.width > shader::kViewMaxSize || pairs.height > shader::kViewMaxSize)
+      throw EngineError("Vulkan gmsd: images larger than 64 x 64 (use the CPU backend)");
+    const uint64_t per_chunk = std::min<uint64_t>(pairs.count, max_buffer_ / (4 * n));
+    vk::Buffer& a = buffer(pair_a_, 4 * n * per_chunk);
+    vk::Buffer& b = buffer(pair_b_, 4 * n * per_chunk);
+    vk::Buffer& o = buffer(pair_out_, 4 * per_chunk);
+    const uint32_t max_x = context_.limits().maxComputeWorkGroupCount[0];
+    for (uint64_t first = 0; first < pairs.count; first += per_chunk) {
+      const uint32_t count = uint32_t(std::min<uint64_t>(per_chunk, pairs.count - first));
+      std::memcpy(a.data<float>(), pairs.first + first * n, 4 * n * count);
+      std::memcpy(b.data<float>(), pairs.second + first * n, 4 * n * count);
+      sequence_.begin();
+      for (uint32_t x = 0; x < count; x += max_x) {
+        GmsdPush push{pairs.width, pairs.height, x, std::min(max_x, count - x)};
+        sequence_.dispatch(gmsd_, {&a, &b, &o}, &push, push.count, 1, 1);
+      }
+      sequence_.submit_and_wait();
+      std::memcpy(out.data() + first, o.data<float>(), 4 * count);
+    }
+    return out;
+  }
+
+  std::unique_ptr<ViewSet> prepare_views(const ViewSetDesc& d) override {
+    check_view_set(d);
+    auto set = std::make_unique<VulkanViewSet>();
+    set->size_ = d.size;
+    set->views = d.views;
+    if (d.views.empty()) return set;
+    const uint64_t tex_bytes = 4ull * d.texture_width * d.texture_height;
+    if (tex_bytes > max_buffer_)
+      throw EngineError("Vulkan: the texture (" + std::to_string(d.texture_width) + "x" +
+                        std::to_string(d.texture_height) + " floats) exceeds the device's largest buffer");
+    set->view_buffer = upload(d.views.data(), d.views.size() * sizeof(ViewDesc));
+    set->triangle_buffer = upload(d.triangles.data(), d.triangles.size() * sizeof(ViewTriangle));
+    auto texture = upload(d.texture, tex_bytes);
+    const uint64_t pixels = uint64_t(d.size) * d.size;
+    // Reference floats bound a page: 4 bytes a pixel (coverage takes 1).
+    const uint32_t per_page = uint32_t(std::min<uint64_t>(d.views.size(), max_buffer_ / (4 * pixels)));
+    const uint32_t max_x = context_.limits().maxComputeWorkGroupCount[0];
+    for (uint32_t first = 0; first < d.views.size(); first += per_page) {
+      VulkanViewSet::Page page;
+      page.first = first;
+      page.count = std::min<uint32_t>(per_page, uint32_t(d.views.size()) - first);
+      page.coverage = std::make_unique<vk::Buffer>(context_, pixels * page.count);
+      page.reference = std::make_unique<vk::Buffer>(context_, 4 * pixels * page.count);
+      sequence_.begin();
+      for (uint32_t x = 0; x < page.count; x += max_x) {
+        ViewPush push{d.size, first + x, std::min(max_x, page.count - x), d.texture_width, d.texture_height, first, 0, 0};
+        sequence_.dispatch(view_prepare_,
+                           {set->view_buffer.get(), set->triangle_buffer.get(), texture.get(), page.coverage.get(),
+                            page.reference.get()},
+                           &push, push.count, 1, 1);
+      }
+      sequence_.submit_and_wait();
+      set->pages.push_back(std::move(page));
+    }
+    return set;
+  }
+
+  void score_views(ViewSet& views, const ViewCandidate* c, size_t count, float* gmsd, ViewImages* images) override {
+    auto* set = dynamic_cast<VulkanViewSet*>(&views);
+    if (!set) throw EngineError("score_views: the view set belongs to another engine");
+    const uint32_t S = set->size_;
+    const size_t pixels = size_t(S) * S;
+    for (size_t k = 0; k < count; ++k)
+      if (c[k].view >= set->view_count()) throw EngineError("score_views: candidate names a view that does not exist");
+    if (images) {
+      images->coverage.resize(pixels * count), images->reference.resize(pixels * count);
+      images->candidate.resize(pixels * count);
+    }
+    if (count == 0) return;
+    const uint32_t chunk = uint32_t(std::min<uint64_t>({kScoreChunk, count, max_buffer_ / kScoreSlotBytes}));
+    vk::Buffer& cand = buffer(candidates_, sizeof(ViewCandidate) * chunk);
+    vk::Buffer& scratch = buffer(scratch_, kScoreSlotBytes * chunk);
+    vk::Buffer& results = buffer(results_, 4ull * chunk);
+    for (const auto& page : set->pages) {
+      // This page's candidates, in input order.
+      std::vector<uint32_t> mine;
+      for (size_t k = 0; k < count; ++k)
+        if (c[k].view >= page.first && c[k].view < page.first + page.count) mine.push_back(uint32_t(k));
+      for (size_t first = 0; first < mine.size(); first += chunk) {
+        const uint32_t n = uint32_t(std::min<size_t>(chunk, mine.size() - first));
+        for (uint32_t k = 0; k < n; ++k) cand.data<ViewCandidate>()[k] = c[mine[first + k]];
+        sequence_.begin();
+        ViewPush push{S, 0, n, 0, 0, page.first, images ? 1u : 0u, 0};
+        sequence_.dispatch(view_score_,
+                           {set->view_buffer.get(), set->triangle_buffer.get(), &cand, page.coverage.get(),
+                            page.reference.get(), &scratch, &results},
+                           &push, n, 1, 1);
+        sequence_.submit_and_wait();
+        for (uint32_t k = 0; k < n; ++k) {
+          const uint32_t out = mine[first + k];
+          gmsd[out] = results.data<float>()[k];
+          if (!images) continue;
+          const uint32_t local = c[out].view - page.first;
+          std::memcpy(&images->coverage[out * pixels], page.coverage->data<uint8_t>() + local * pixels, pixels);
+          std::memcpy(&images->reference[out * pixels], page.reference->data<float>() + local * pixels, 4 * pixels);
+          // Candidate render: OFF_CAND of the slot.
+          const float* slot = scratch.data<float>() + k * (kScoreSlotBytes / 4) +
+                              2 * shader::kViewMaxSize * shader::kViewMaxSize;
+          std::memcpy(&images->candidate[out * pixels], slot, 4 * pixels);
+        }
+      }
+    }
+  }
+
  private:
+  std::unique_ptr<vk::Buffer> upload(const void* data, uint64_t bytes) {
+    auto b = std::make_unique<vk::Buffer>(context_, std::max<uint64_t>(bytes, 4));
+    std::memcpy(b->data<uint8_t>(), data, bytes);
+    return b;
+  }
+
   // Keeps a buffer across calls and grows it only when a call needs more.
   vk::Buffer& buffer(std::unique_ptr<vk::Buffer>& slot, uint64_t bytes) {
     if (!slot || slot->bytes() < bytes) {
@@ -83,9 +231,11 @@ class VulkanEngine final : public Engine {
 
   vk::Context context_;
   uint64_t max_buffer_;
-  vk::Kernel luminance_, downsample_;
+  vk::Kernel luminance_, downsample_, gmsd_, view_prepare_, view_score_;
   vk::Sequence sequence_;
   std::unique_ptr<vk::Buffer> rgba_, full_, half_;
+  std::unique_ptr<vk::Buffer> pair_a_, pair_b_, pair_out_;
+  std::unique_ptr<vk::Buffer> candidates_, scratch_, results_;
 };
 
 }  // namespace

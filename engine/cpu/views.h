@@ -1,0 +1,59 @@
+// The per-triangle view kernels of the CPU backend, written to mirror the GLSL ones
+// (view_prepare.comp, view_score.comp) operation for operation: they are the oracle the
+// Vulkan path is tested against. Conventions in shaders/layout.h.
+#pragma once
+
+#include "layout.h"
+
+#include <cstdint>
+#include <vector>
+
+namespace uvpress::engine::cpu {
+
+using shader::ViewCandidate;
+using shader::ViewDesc;
+using shader::ViewTriangle;
+
+// Coverage and reference render of one view: per pixel the nearest ring triangle (integer
+// edge functions at 1/16 pixel, top-left rule, larger depth wins, ties to the earlier
+// triangle) and the bilinear, clamp-to-edge sample of the source luminance there.
+void rasterize_view(const ViewDesc& view, const ViewTriangle* triangles, uint32_t size, const float* texture,
+                    uint32_t texture_width, uint32_t texture_height, uint8_t* coverage, float* reference);
+
+// Where each covered pixel lands in a candidate's texture tile: tile coordinates (a, b)
+// with texel (i, j) at integer (i, j); the tile is `width` x `height` <= kTileMax squared.
+struct TileMap {
+  uint32_t width = 0, height = 0;
+  float lattice = 1;           // tile texel spacing in J-mapped source texels (a power of two)
+  std::vector<uint32_t> pixel;  // covered pixel indices, in raster order
+  std::vector<float> a, b;     // their tile coordinates
+};
+TileMap map_to_tile(const ViewDesc& view, const ViewTriangle* triangles, uint32_t size, const uint8_t* coverage,
+                    const float j[4]);
+
+// Fixed-point scale of the normal-equation sums: integer sums are exact and order-free,
+// so a GPU accumulating them with atomics gets the CPU's numbers bit for bit.
+constexpr float kFixedPoint = 65536.0f;
+// Smoothness weight, relative to covered pixels per texel: a small membrane term
+// mu sum_edges (T_i - T_j)^2 over the tile's 4-neighbour edges makes A^T A definite and
+// fills texels no pixel sees from their neighbours (a pull towards a constant would bias
+// the weakly seen texels at the coverage border instead).
+constexpr float kSmoothness = 1e-5f;
+// Preconditioned CG stops at ||r|| <= kBakeTolerance ||b|| or after kBakeMaxIterations.
+constexpr float kBakeTolerance = 1e-5f;
+constexpr uint32_t kBakeMaxIterations = 200;
+
+// The least-squares bake (eq. 11) with the membrane term:
+//   min_T sum_q (sum_k w_qk T_k - ref_q)^2 + mu sum_(i,j) (T_i - T_j)^2,
+// solved for T - m (m the mean reference luminance, the starting guess). Returns the tile
+// texels T (width * height).
+std::vector<float> bake_tile(const TileMap& map, const float* reference, uint32_t* iterations = nullptr);
+
+// Bilinear render of `tile` at the mapped pixels; empty pixels stay 0.
+void render_tile(const TileMap& map, const std::vector<float>& tile, uint32_t size, float* candidate);
+
+// Everything for one candidate: map, bake, render, GMSD against the reference.
+float score_view(const ViewDesc& view, const ViewTriangle* triangles, uint32_t size, const uint8_t* coverage,
+                 const float* reference, const float j[4], float* candidate);
+
+}  // namespace uvpress::engine::cpu

@@ -1,0 +1,24 @@
+// The limits on a view set that every backend shares (shaders/layout.h).
+#include "engine.h"
+
+#include <cmath>
+#include <string>
+
+namespace uvpress::engine {
+
+void check_view_set(const ViewSetDesc& d) {
+  if (d.size < 8 || d.size > shader::kViewMaxSize || d.size % 2)
+    throw EngineError("view size " + std::to_string(d.size) + " is not an even number in 8..64");
+  if (!d.texture || d.texture_width == 0 || d.texture_height == 0) throw EngineError("views need a texture");
+  for (const ViewDesc& v : d.views) {
+    if (v.triangle_count == 0 || v.triangle_count > shader::kViewMaxTriangles ||
+        uint64_t(v.first_triangle) + v.triangle_count > d.triangles.size())
+      throw EngineError("a view's triangle range is empty, too long or outside the triangle array");
+    for (uint32_t k = 0; k < v.triangle_count; ++k)
+      for (float c : d.triangles[v.first_triangle + k].xy)
+        if (!(std::abs(c) <= float(shader::kViewGuardBand)))
+          throw EngineError("a view triangle lies outside the guard band (clip it on the host)");
+  }
+}
+
+}  // namespace uvpress::engine

@@ -1,0 +1,261 @@
+#version 450
+// Scores candidate Jacobians of per-triangle views (seed 001, section 4.1.1): maps the
+// view's covered pixels through J, fits a texel tile to the reference render by least
+// squares (eq. 11; normal equations in fixed point with integer atomics, then Jacobi-
+// preconditioned CG), renders it bilinearly and returns GMSD against the reference.
+// One workgroup per candidate; engine/cpu/view_bake.cpp is the oracle.
+#extension GL_GOOGLE_include_directive : require
+#include "layout.h"
+#include "view_raster.glsl"
+
+layout(local_size_x = 256) in;
+layout(std430, binding = 0) readonly buffer Views { ViewDesc views[]; };
+layout(std430, binding = 1) readonly buffer Triangles { ViewTriangle triangles[]; };
+layout(std430, binding = 2) readonly buffer Candidates { ViewCandidate candidates[]; };
+layout(std430, binding = 3) readonly buffer Coverage { uint coverage[]; };    // page of views
+layout(std430, binding = 4) readonly buffer Reference { float reference[]; }; // page of views
+layout(std430, binding = 5) buffer Scratch { uint scratch[]; };               // one slot per candidate
+layout(std430, binding = 6) writeonly buffer Result { float result[]; };
+layout(push_constant) uniform Push { ViewPush p; };
+
+// Scratch slot layout, in 32-bit words.
+const uint kPix = kViewMaxSize * kViewMaxSize, kTexels = kTileMax * kTileMax;
+const uint OFF_U = 0u, OFF_V = kPix, OFF_CAND = 2u * kPix, OFF_K = 3u * kPix;
+const uint OFF_R = OFF_K + 9u * kTexels, OFF_X = OFF_R + kTexels, OFF_Z = OFF_X + kTexels;
+const uint OFF_P = OFF_Z + kTexels, OFF_AP = OFF_P + kTexels, OFF_DIAG = OFF_AP + kTexels;
+const uint kSlot = OFF_DIAG + kTexels;
+const float kFixedPoint = 65536.0, kSmoothness = 1e-5, kTolerance = 1e-5;
+const uint kMaxIterations = 200u;
+
+uint g_slot, g_ref_base, g_cov_base;
+
+float sf(uint off) { return uintBitsToFloat(scratch[g_slot + off]); }
+void set_sf(uint off, float v) { scratch[g_slot + off] = floatBitsToUint(v); }
+int fixed_point(float x) { return int(floor(x * kFixedPoint + 0.5)); }
+
+float gmsd_a(int x, int y) {
+  int S = int(p.size);
+  return (x < S && y < S) ? reference[g_ref_base + uint(y * S + x)] : 0.0;
+}
+float gmsd_b(int x, int y) {
+  int S = int(p.size);
+  return (x < S && y < S) ? sf(OFF_CAND + uint(y * S + x)) : 0.0;
+}
+
+#include "gmsd.glsl"
+
+shared vec3 s_s[kViewMaxTriangles];
+shared vec3 s_t[kViewMaxTriangles];
+shared int s_ref_sum;
+shared uint s_count;
+
+float workgroup_min(float v) {
+  uint tid = gl_LocalInvocationIndex;
+  s_red[tid] = v;
+  barrier();
+  for (uint s = GMSD_WG / 2u; s > 0u; s >>= 1u) {
+    if (tid < s) s_red[tid] = min(s_red[tid], s_red[tid + s]);
+    barrier();
+  }
+  float r = s_red[0];
+  barrier();
+  return r;
+}
+
+uint cover_at(uint pix) { return (coverage[g_cov_base + pix / 4u] >> (8u * (pix % 4u))) & 0xffu; }
+
+uint stencil_slot(int di, int dj) { return uint((di + 1) + 3 * (dj + 1)); }
+
+// (A p) for texel t of a w x h tile, A the 9-point stencil in OFF_K (as floats by then).
+float apply_row(uint t, int w, int h, uint src) {
+  int ii = int(t) % w, jj = int(t) / w;
+  precise float acc = 0.0;
+  for (int dj = -1; dj <= 1; ++dj)
+    for (int di = -1; di <= 1; ++di) {
+      int i2 = ii + di, j2 = jj + dj;
+      if (i2 < 0 || j2 < 0 || i2 >= w || j2 >= h) continue;
+      acc += sf(OFF_K + t * 9u + stencil_slot(di, dj)) * sf(src + uint(j2 * w + i2));
+    }
+  return acc;
+}
+
+void main() {
+  uint tid = gl_LocalInvocationIndex;
+  uint cand_index = p.first + gl_WorkGroupID.x;
+  ViewCandidate c = candidates[cand_index];
+  uint local_view = c.view - p.view_base;
+  ViewDesc view = views[c.view];
+  int S = int(p.size);
+  uint npix = uint(S * S);
+  g_slot = gl_WorkGroupID.x * kSlot;
+  g_ref_base = local_view * npix;
+  g_cov_base = local_view * npix / 4u;
+  if (tid < view.triangle_count) {
+    ViewTriangle t = triangles[view.first_triangle + tid];
+    s_s[tid] = vec3(t.s[0], t.s[1], t.s[2]);
+    s_t[tid] = vec3(t.t[0], t.t[1], t.t[2]);
+  }
+  if (tid == 0u) { s_ref_sum = 0; s_count = 0u; }
+  barrier();
+
+  // 1. Map covered pixels through J: (s, t) - centre, then J.
+  float u_lo = 1e30, u_hi = -1e30, v_lo = 1e30, v_hi = -1e30;
+  for (uint pix = tid; pix < npix; pix += 256u) {
+    uint k = cover_at(pix);
+    if (k == kNoTriangle) continue;
+    float cx = float(int(pix) % S) + 0.5, cy = float(int(pix) / S) + 0.5;
+    float s = plane_at(s_s[k].x, s_s[k].y, s_s[k].z, cx, cy);
+    float t = plane_at(s_t[k].x, s_t[k].y, s_t[k].z, cx, cy);
+    float ds = s - view.center_s, dt = t - view.center_t;
+    precise float pu = c.j[0] * ds;
+    pu += c.j[1] * dt;
+    precise float pv = c.j[2] * ds;
+    pv += c.j[3] * dt;
+    set_sf(OFF_U + pix, pu);
+    set_sf(OFF_V + pix, pv);
+    u_lo = min(u_lo, pu); u_hi = max(u_hi, pu); v_lo = min(v_lo, pv); v_hi = max(v_hi, pv);
+  }
+  u_lo = workgroup_min(u_lo); u_hi = -workgroup_min(-u_hi);
+  v_lo = workgroup_min(v_lo); v_hi = -workgroup_min(-v_hi);
+  bool empty = u_lo > u_hi;
+
+  // 2. Tile: a power-of-two lattice keeps it within kTileMax texels a side.
+  float span = max(u_hi - u_lo, v_hi - v_lo), inv = 1.0;
+  if (!empty)
+    while (span * inv > float(kTileMax - 3u)) inv *= 0.5;
+  float ou = floor(u_lo * inv), ov = floor(v_lo * inv);
+  int w = empty ? 1 : int(floor(u_hi * inv) - ou) + 2;
+  int h = empty ? 1 : int(floor(v_hi * inv) - ov) + 2;
+  uint n = uint(w * h);
+  for (uint q = tid; q < n * 9u; q += 256u) scratch[g_slot + OFF_K + q] = 0u;
+  for (uint q = tid; q < n; q += 256u) scratch[g_slot + OFF_R + q] = 0u;
+  memoryBarrierBuffer();
+  barrier();
+
+  // 3. Normal equations A^T A and A^T ref, integer sums (order-free, exact).
+  for (uint pix = tid; pix < npix; pix += 256u) {
+    if (cover_at(pix) == kNoTriangle) continue;
+    float a = sf(OFF_U + pix) * inv - ou, b = sf(OFF_V + pix) * inv - ov;
+    set_sf(OFF_U + pix, a);
+    set_sf(OFF_V + pix, b);
+    float fa0 = floor(a), fb0 = floor(b);
+    uint i0 = uint(fa0), j0 = uint(fb0);
+    float fa = a - fa0, fb = b - fb0;
+    float wt[4] = float[4]((1.0 - fa) * (1.0 - fb), fa * (1.0 - fb), (1.0 - fa) * fb, fa * fb);
+    const int di[4] = int[4](0, 1, 0, 1), dj[4] = int[4](0, 0, 1, 1);
+    float ref = reference[g_ref_base + pix];
+    atomicAdd(s_ref_sum, fixed_point(ref));
+    atomicAdd(s_count, 1u);
+    for (int q = 0; q < 4; ++q) {
+      uint row = (j0 + uint(dj[q])) * uint(w) + i0 + uint(di[q]);
+      atomicAdd(scratch[g_slot + OFF_R + row], uint(fixed_point(wt[q] * ref)));
+      for (int r = 0; r < 4; ++r)
+        atomicAdd(scratch[g_slot + OFF_K + row * 9u + stencil_slot(di[r] - di[q], dj[r] - dj[q])],
+                  uint(fixed_point(wt[q] * wt[r])));
+    }
+  }
+  memoryBarrierBuffer();
+  barrier();
+
+  // 4. As floats, in place: A = K / Q + mu L (4-neighbour Laplacian), b = R / Q - mean rowsum(K) / Q.
+  float count = float(s_count);
+  float mean = empty ? 0.0 : float(s_ref_sum) / (kFixedPoint * count);
+  float mu = kSmoothness * count / float(n);
+  const float inv_q = 1.0 / kFixedPoint;
+  for (uint t = tid; t < n; t += 256u) {
+    int rowsum = 0;
+    int ti = int(t) % w, tj = int(t) / w;
+    for (uint s = 0u; s < 9u; ++s) {
+      int k = int(scratch[g_slot + OFF_K + t * 9u + s]);
+      rowsum += k;
+      set_sf(OFF_K + t * 9u + s, float(k) * inv_q);
+    }
+    // Same order as the CPU: left, right, up, down.
+    if (ti > 0) { set_sf(OFF_K + t * 9u + 4u, sf(OFF_K + t * 9u + 4u) + mu); set_sf(OFF_K + t * 9u + 3u, sf(OFF_K + t * 9u + 3u) - mu); }
+    if (ti + 1 < w) { set_sf(OFF_K + t * 9u + 4u, sf(OFF_K + t * 9u + 4u) + mu); set_sf(OFF_K + t * 9u + 5u, sf(OFF_K + t * 9u + 5u) - mu); }
+    if (tj > 0) { set_sf(OFF_K + t * 9u + 4u, sf(OFF_K + t * 9u + 4u) + mu); set_sf(OFF_K + t * 9u + 1u, sf(OFF_K + t * 9u + 1u) - mu); }
+    if (tj + 1 < h) { set_sf(OFF_K + t * 9u + 4u, sf(OFF_K + t * 9u + 4u) + mu); set_sf(OFF_K + t * 9u + 7u, sf(OFF_K + t * 9u + 7u) - mu); }
+    set_sf(OFF_DIAG + t, sf(OFF_K + t * 9u + 4u));
+    precise float bt = float(int(scratch[g_slot + OFF_R + t])) * inv_q;
+    bt -= mean * (float(rowsum) * inv_q);
+    set_sf(OFF_R + t, bt);
+    set_sf(OFF_X + t, 0.0);
+  }
+  memoryBarrierBuffer();
+  barrier();
+
+  // 5. Jacobi-preconditioned CG from x = 0 (the same iteration as the CPU backend).
+  precise float part = 0.0;
+  for (uint t = tid; t < n; t += 256u) part += sf(OFF_R + t) * sf(OFF_R + t);
+  float bb = workgroup_sum(part);
+  if (bb > 0.0) {
+    part = 0.0;
+    for (uint t = tid; t < n; t += 256u) {
+      float z = sf(OFF_R + t) / sf(OFF_DIAG + t);
+      set_sf(OFF_Z + t, z);
+      set_sf(OFF_P + t, z);
+      part += sf(OFF_R + t) * z;
+    }
+    float rz = workgroup_sum(part);
+    float stop = kTolerance * kTolerance * bb;
+    memoryBarrierBuffer();
+    barrier();
+    for (uint it = 0u; it < kMaxIterations; ++it) {
+      part = 0.0;
+      for (uint t = tid; t < n; t += 256u) {
+        float ap = apply_row(t, w, h, OFF_P);
+        set_sf(OFF_AP + t, ap);
+        part += sf(OFF_P + t) * ap;
+      }
+      float alpha = rz / workgroup_sum(part);
+      part = 0.0;
+      for (uint t = tid; t < n; t += 256u) {
+        set_sf(OFF_X + t, sf(OFF_X + t) + alpha * sf(OFF_P + t));
+        float r = sf(OFF_R + t) - alpha * sf(OFF_AP + t);
+        set_sf(OFF_R + t, r);
+        part += r * r;
+      }
+      if (workgroup_sum(part) <= stop) break;
+      part = 0.0;
+      for (uint t = tid; t < n; t += 256u) {
+        float z = sf(OFF_R + t) / sf(OFF_DIAG + t);
+        set_sf(OFF_Z + t, z);
+        part += sf(OFF_R + t) * z;
+      }
+      float rz_next = workgroup_sum(part);
+      float beta = rz_next / rz;
+      rz = rz_next;
+      for (uint t = tid; t < n; t += 256u) set_sf(OFF_P + t, sf(OFF_Z + t) + beta * sf(OFF_P + t));
+      memoryBarrierBuffer();
+      barrier();
+    }
+  }
+  for (uint t = tid; t < n; t += 256u) set_sf(OFF_X + t, sf(OFF_X + t) + mean);
+  memoryBarrierBuffer();
+  barrier();
+
+  // 6. Bilinear render of the tile; empty pixels stay 0 as in the reference.
+  for (uint pix = tid; pix < npix; pix += 256u) {
+    float value = 0.0;
+    if (cover_at(pix) != kNoTriangle) {
+      float a = sf(OFF_U + pix), b = sf(OFF_V + pix);
+      float fa0 = floor(a), fb0 = floor(b);
+      uint t0 = uint(fb0) * uint(w) + uint(fa0), t1 = t0 + uint(w);
+      float fa = a - fa0, fb = b - fb0;
+      precise float top = (1.0 - fa) * sf(OFF_X + t0);
+      top += fa * sf(OFF_X + t0 + 1u);
+      precise float bottom = (1.0 - fa) * sf(OFF_X + t1);
+      bottom += fa * sf(OFF_X + t1 + 1u);
+      precise float v = (1.0 - fb) * top;
+      v += fb * bottom;
+      value = v;
+    }
+    set_sf(OFF_CAND + pix, value);
+  }
+  memoryBarrierBuffer();
+  barrier();
+
+  // 7. GMSD against the reference.
+  float g = gmsd_run(p.size, p.size);
+  if (tid == 0u) result[cand_index] = g;
+}

@@ -1,0 +1,264 @@
+// Per-triangle views on both backends: coverage, reference renders, the least-squares
+// bake and the candidate's GMSD, against each other and against independent references
+// (a dense double normal-equations solve, the symmetries the paper relies on).
+#include <catch2/catch.hpp>
+
+#include "cpu/views.h"
+#include "engine.h"
+#include "perceptual/triangle_view.h"
+
+#include <Eigen/Dense>
+
+#include <cmath>
+#include <random>
+
+using namespace uvpress;
+using namespace uvpress::engine;
+
+namespace {
+
+std::unique_ptr<Engine> lavapipe() {
+  EngineOptions o;
+  o.validation = true;
+  return make_vulkan_engine(DeviceRequest::Lavapipe, o);
+}
+
+// A luminance texture: fine checks and sines on the left half, constant on the right.
+std::vector<float> test_texture(uint32_t w, uint32_t h) {
+  std::vector<float> t(size_t(w) * h);
+  for (uint32_t y = 0; y < h; ++y)
+    for (uint32_t x = 0; x < w; ++x)
+      t[size_t(y) * w + x] = x < w / 2 ? float(0.5 + 0.3 * std::sin(x * 1.3) * std::cos(y * 0.7) + ((x / 2 + y / 2) % 2) * 0.15)
+                                       : 0.4f;
+  return t;
+}
+
+// Random views: a centre triangle and random neighbours with random planes, some reaching
+// outside the view and overlapping each other (depth decides).
+ViewSetDesc random_views(uint32_t count, uint32_t size, uint32_t seed, const std::vector<float>& tex, uint32_t tw,
+                         uint32_t th) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> pos(-0.3f * size, 1.3f * size), unit(-1, 1), tc(4, float(tw - 4));
+  ViewSetDesc d;
+  d.size = size;
+  d.texture = tex.data(), d.texture_width = tw, d.texture_height = th;
+  for (uint32_t v = 0; v < count; ++v) {
+    ViewDesc view{uint32_t(d.triangles.size()), uint32_t(1 + rng() % 12), 0, 0};
+    for (uint32_t k = 0; k < view.triangle_count; ++k) {
+      ViewTriangle t{};
+      for (float& c : t.xy) c = std::round(pos(rng) * 64) / 64;  // some vertices on exact pixel centres/edges
+      t.depth[0] = unit(rng), t.depth[1] = 0.01f * unit(rng), t.depth[2] = 0.01f * unit(rng);
+      t.s[0] = tc(rng) * 0.3f, t.s[1] = 0.2f * unit(rng), t.s[2] = 0.2f * unit(rng);
+      t.t[0] = tc(rng) * 0.3f, t.t[1] = 0.2f * unit(rng), t.t[2] = 0.2f * unit(rng);
+      d.triangles.push_back(t);
+    }
+    view.center_s = std::round(d.triangles[view.first_triangle].s[0]);
+    view.center_t = std::round(d.triangles[view.first_triangle].t[0]);
+    d.views.push_back(view);
+  }
+  return d;
+}
+
+// Views of a real, curved mesh: a bent 12 x 12 grid with UVs over the texture.
+struct GridMesh {
+  std::vector<float> positions, uvs;
+  std::vector<uint32_t> indices;
+};
+GridMesh curved_grid(int n, float texel_span) {
+  GridMesh m;
+  for (int j = 0; j <= n; ++j)
+    for (int i = 0; i <= n; ++i) {
+      float s = float(i) / n, t = float(j) / n;
+      m.positions.insert(m.positions.end(), {std::sin(s * 1.5f), t, std::cos(s * 1.5f) + 0.2f * s * t});
+      m.uvs.insert(m.uvs.end(), {0.1f + s * texel_span, 0.1f + t * texel_span});
+    }
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      uint32_t a = uint32_t(j * (n + 1) + i), b = a + 1, c = a + uint32_t(n) + 1, d = c + 1;
+      m.indices.insert(m.indices.end(), {a, b, d, a, d, c});
+    }
+  return m;
+}
+
+ViewSetDesc mesh_views(const GridMesh& m, const std::vector<float>& tex, uint32_t tw, uint32_t th, uint32_t size) {
+  perceptual::TriangleViewInput in;
+  in.positions = m.positions.data(), in.vertex_count = m.positions.size() / 3;
+  in.indices = m.indices.data(), in.triangle_count = m.indices.size() / 3;
+  in.uvs = m.uvs.data(), in.texture_width = tw, in.texture_height = th;
+  ViewSetDesc d = perceptual::make_triangle_views(in, size);
+  d.texture = tex.data(), d.texture_width = tw, d.texture_height = th;
+  return d;
+}
+
+ViewCandidate candidate(uint32_t view, float l1, float l2, float alpha, float beta = 0) {
+  // J = R(alpha) V(beta) diag(l1, l2) V(beta)^T, as DESIGN.md's per-triangle view.
+  Eigen::Matrix2f R, V, L;
+  R << std::cos(alpha), -std::sin(alpha), std::sin(alpha), std::cos(alpha);
+  V << std::cos(beta), -std::sin(beta), std::sin(beta), std::cos(beta);
+  L << l1, 0, 0, l2;
+  Eigen::Matrix2f J = R * V * L * V.transpose();
+  return {{J(0, 0), J(0, 1), J(1, 0), J(1, 1)}, view, 0, 0, 0};
+}
+
+}  // namespace
+
+TEST_CASE("Views: coverage identical and pixels within 1e-5 between backends on random one-rings", "[engine][views][vulkan]") {
+  const uint32_t tw = 96, th = 80;
+  auto tex = test_texture(tw, th);
+  auto vk = lavapipe();
+  auto cpu_engine = make_cpu_engine({});
+  for (uint32_t size : {64u, 32u, 18u}) {
+    INFO("size " << size);
+    ViewSetDesc d = random_views(40, size, size, tex, tw, th);
+    auto a = cpu_engine->prepare_views(d), b = vk->prepare_views(d);
+    std::vector<ViewCandidate> cands;
+    for (uint32_t v = 0; v < 40; ++v) cands.push_back(candidate(v, 0.3f + 0.017f * v, 0.9f - 0.01f * v, 0.1f * v));
+    std::vector<float> ga(cands.size()), gb(cands.size());
+    ViewImages ia, ib;
+    cpu_engine->score_views(*a, cands.data(), cands.size(), ga.data(), &ia);
+    vk->score_views(*b, cands.data(), cands.size(), gb.data(), &ib);
+    CHECK(ia.coverage == ib.coverage);
+    size_t covered = 0;
+    for (uint8_t c : ia.coverage) covered += c != shader::kNoTriangle;
+    CHECK(covered > ia.coverage.size() / 4);  // the test exercises real coverage
+    double ref_err = 0, cand_err = 0;
+    for (size_t i = 0; i < ia.reference.size(); ++i) {
+      ref_err = std::max(ref_err, double(std::abs(ia.reference[i] - ib.reference[i])));
+      cand_err = std::max(cand_err, double(std::abs(ia.candidate[i] - ib.candidate[i])));
+    }
+    CHECK(ref_err < 1e-5);
+    // The bakes differ only in the order CG sums its dot products; random planes make
+    // badly conditioned tiles, so weakly seen texels differ most.
+    CHECK(cand_err < 2e-3);
+    for (size_t k = 0; k < cands.size(); ++k) CHECK(std::abs(ga[k] - gb[k]) <= 1e-3 * ga[k] + 1e-4);
+  }
+  CHECK(vk->validation_errors() == 0);
+}
+
+TEST_CASE("Views: the bake equals a dense double normal-equations solve", "[engine][views]") {
+  const uint32_t tw = 96, th = 80, size = 24;
+  auto tex = test_texture(tw, th);
+  auto mesh = curved_grid(6, 0.35f);
+  ViewSetDesc d = mesh_views(mesh, tex, tw, th, size);
+  auto cpu_engine = make_cpu_engine({});
+  auto vk = lavapipe();
+  auto sa = cpu_engine->prepare_views(d), sb = vk->prepare_views(d);
+  for (uint32_t v : {0u, 13u, 40u}) {
+    for (auto c : {candidate(v, 1, 1, 0), candidate(v, 0.5f, 0.8f, 0.4f, 0.3f)}) {
+      float ga, gb;
+      ViewImages ia, ib;
+      cpu_engine->score_views(*sa, &c, 1, &ga, &ia);
+      vk->score_views(*sb, &c, 1, &gb, &ib);
+      // Independent: the tile map from the CPU, then A assembled and solved densely in double.
+      cpu::TileMap m = cpu::map_to_tile(d.views[v], d.triangles.data(), size, ia.coverage.data(), c.j);
+      REQUIRE(!m.pixel.empty());
+      const int n = int(m.width * m.height), q = int(m.pixel.size());
+      Eigen::MatrixXd A = Eigen::MatrixXd::Zero(q, n);
+      Eigen::VectorXd ref(q);
+      for (int k = 0; k < q; ++k) {
+        double a = m.a[size_t(k)], b = m.b[size_t(k)], fa = a - std::floor(a), fb = b - std::floor(b);
+        int i0 = int(std::floor(a)), j0 = int(std::floor(b)), w = int(m.width);
+        A(k, j0 * w + i0) += (1 - fa) * (1 - fb), A(k, j0 * w + i0 + 1) += fa * (1 - fb);
+        A(k, (j0 + 1) * w + i0) += (1 - fa) * fb, A(k, (j0 + 1) * w + i0 + 1) += fa * fb;
+        ref(k) = ia.reference[m.pixel[size_t(k)]];
+      }
+      const double mu = cpu::kSmoothness * q / n;
+      Eigen::MatrixXd L = Eigen::MatrixXd::Zero(n, n);  // 4-neighbour membrane
+      for (int t = 0; t < n; ++t) {
+        int i = t % int(m.width), j = t / int(m.width);
+        for (auto [di, dj] : {std::pair{1, 0}, {0, 1}}) {
+          if (i + di >= int(m.width) || j + dj >= int(m.height)) continue;
+          int u = (j + dj) * int(m.width) + i + di;
+          L(t, t) += 1, L(u, u) += 1, L(t, u) -= 1, L(u, t) -= 1;
+        }
+      }
+      Eigen::MatrixXd N = A.transpose() * A + mu * L;
+      Eigen::VectorXd x = N.ldlt().solve(A.transpose() * ref);
+      Eigen::VectorXd render = A * x;
+      double err_cpu = 0, err_vk = 0;
+      for (int k = 0; k < q; ++k) {
+        err_cpu = std::max(err_cpu, std::abs(render(k) - ia.candidate[m.pixel[size_t(k)]]));
+        err_vk = std::max(err_vk, std::abs(render(k) - ib.candidate[m.pixel[size_t(k)]]));
+      }
+      INFO("view " << v << " J " << c.j[0] << " " << c.j[1] << " " << c.j[2] << " " << c.j[3]);
+      // CG stops at 1e-4 relative residual; rendered values agree to a few 1e-4.
+      CHECK(err_cpu < 2e-3);
+      CHECK(err_vk < 2e-3);
+    }
+  }
+  CHECK(vk->validation_errors() == 0);
+}
+
+TEST_CASE("Views: identity reproduces the reference; shrinking costs more on detail; 90 degree symmetry", "[engine][views]") {
+  const uint32_t tw = 128, th = 128, size = 64;
+  auto tex = test_texture(tw, th);
+  // Triangles about 10 texels across: magnified about 6x in their 64 px views.
+  auto detailed = curved_grid(6, 0.4f);
+  auto flat = detailed;
+  for (size_t i = 0; i < flat.uvs.size(); i += 2) flat.uvs[i] += 0.5f;  // the constant right half
+  for (auto* e : {make_cpu_engine({}).release(), lavapipe().release()}) {
+    std::unique_ptr<Engine> engine(e);
+    INFO(engine->device().backend);
+    auto det = engine->prepare_views(mesh_views(detailed, tex, tw, th, size));
+    auto con = engine->prepare_views(mesh_views(flat, tex, tw, th, size));
+    std::vector<ViewCandidate> c;
+    for (uint32_t v = 10; v < 70; v += 7) {
+      c.push_back(candidate(v, 1, 1, 0));
+      c.push_back(candidate(v, 0.25f, 0.25f, 0));
+      c.push_back(candidate(v, 0.6f, 0.3f, 0.0f, 0.2f));
+      c.push_back(candidate(v, 0.6f, 0.3f, float(M_PI / 2), 0.2f));
+      c.push_back(candidate(v, 0.6f, 0.3f, float(M_PI), 0.2f));
+    }
+    std::vector<float> gd(c.size()), gc(c.size());
+    ViewImages img;
+    engine->score_views(*det, c.data(), c.size(), gd.data(), &img);
+    engine->score_views(*con, c.data(), c.size(), gc.data());
+    for (size_t k = 0; k < c.size(); k += 5) {
+      INFO("view " << c[k].view);
+      CHECK(gd[k] < 2e-3);  // identity: the tile is the original texels, the render the reference
+      CHECK(gc[k] < 2e-3);
+      CHECK(gd[k + 1] > 0.02);       // a 4x shrink is visible on detail...
+      CHECK(gd[k + 1] > 10 * gc[k + 1]);  // ...and far more than on a constant signal
+      // R(90) and R(180) map the texel lattice onto itself: the loss is the same.
+      CHECK(std::abs(gd[k + 3] - gd[k + 2]) <= 0.02 * gd[k + 2] + 1e-4);
+      CHECK(std::abs(gd[k + 4] - gd[k + 2]) <= 0.02 * gd[k + 2] + 1e-4);
+    }
+    // Identity render matches the reference pixel by pixel.
+    double err = 0;
+    const size_t n = size_t(size) * size;
+    for (size_t i = 0; i < n; ++i) err = std::max(err, double(std::abs(img.candidate[i] - img.reference[i])));
+    CHECK(err < 2e-3);
+    CHECK(engine->validation_errors() == 0);
+  }
+}
+
+TEST_CASE("Views: per-triangle camera frames the triangle in its bounding square", "[engine][views]") {
+  // One flat triangle: it fills half its square view, touching three of its sides.
+  const float pos[] = {0, 0, 0, 2, 0, 0, 0, 1, 0};
+  const float uv[] = {0.1f, 0.1f, 0.5f, 0.1f, 0.1f, 0.3f};
+  const uint32_t idx[] = {0, 1, 2};
+  perceptual::TriangleViewInput in{pos, 3, idx, 1, uv, 100, 100};
+  auto d = perceptual::make_triangle_views(in, 64);
+  REQUIRE(d.views.size() == 1);
+  REQUIRE(d.views[0].triangle_count == 1);
+  const auto& t = d.triangles[0];
+  float lo_x = 1e9, hi_x = -1e9, lo_y = 1e9, hi_y = -1e9;
+  for (int k = 0; k < 3; ++k)
+    lo_x = std::min(lo_x, t.xy[2 * k]), hi_x = std::max(hi_x, t.xy[2 * k]), lo_y = std::min(lo_y, t.xy[2 * k + 1]),
+    hi_y = std::max(hi_y, t.xy[2 * k + 1]);
+  CHECK(std::max(hi_x - lo_x, hi_y - lo_y) == Approx(64).margin(1e-3));  // the longer side spans the view
+  CHECK(lo_x >= -1e-3);
+  CHECK(lo_y >= -1e-3);
+  CHECK(hi_x <= 64 + 1e-3);
+  CHECK(hi_y <= 64 + 1e-3);
+  // Texel coordinate planes reproduce the vertices' UVs (s = u W - 0.5).
+  for (int k = 0; k < 3; ++k) {
+    float x = t.xy[2 * k], y = t.xy[2 * k + 1];
+    float s = t.s[0] + t.s[1] * x + t.s[2] * y, tt = t.t[0] + t.t[1] * x + t.t[2] * y;
+    bool match = false;
+    for (int v = 0; v < 3; ++v)
+      match |= std::abs(s - (uv[2 * v] * 100 - 0.5f)) < 1e-3f && std::abs(tt - (uv[2 * v + 1] * 100 - 0.5f)) < 1e-3f;
+    CHECK(match);
+  }
+  CHECK(d.views[0].center_s == std::round((10 + 50 + 10) / 3.0f - 0.5f));
+}
