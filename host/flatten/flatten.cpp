@@ -63,6 +63,7 @@ using Clock = std::chrono::steady_clock;
 // The true distortion of every triangle (relative to the ideal references).
 struct Analysis {
   double energy = 0, max_distortion = 0, fraction_bounded = 0;
+  size_t inverted = 0;  // D = +inf: det J <= 0
   std::vector<double> J, D;  // 4 and 1 per triangle
 };
 
@@ -73,8 +74,8 @@ void analyze(const Problem& p, const std::vector<double>& uv, const std::vector<
   a.D.resize(size_t(nt));
   std::vector<double> e(static_cast<size_t>(nt));
   double max_d = 0;
-  long bounded = 0;
-#pragma omp parallel for schedule(static) if (worth_threads(nt)) reduction(max : max_d) reduction(+ : bounded)
+  long bounded = 0, inverted = 0;
+#pragma omp parallel for schedule(static) if (worth_threads(nt)) reduction(max : max_d) reduction(+ : bounded, inverted)
   for (long t = 0; t < nt; ++t) {
     double* J = &a.J[4 * size_t(t)];
     jacobian(&p.ideal[4 * size_t(t)], uv.data(), &p.triangles[3 * size_t(t)], J);
@@ -83,10 +84,12 @@ void analyze(const Problem& p, const std::vector<double>& uv, const std::vector<
     e[size_t(t)] = weights[size_t(t)] * d;
     max_d = std::max(max_d, d);
     bounded += d <= K;
+    inverted += !std::isfinite(d);
   }
   a.energy = fixed_order_sum(size_t(nt), e.data());
   a.max_distortion = max_d;
   a.fraction_bounded = double(bounded) / double(nt);
+  a.inverted = size_t(inverted);
 }
 
 }  // namespace
@@ -167,6 +170,8 @@ Result flatten(const Mesh& mesh, const Options& o) {
     rec.t_com = t_com;
     rec.step = s.step, rec.max_step = s.max_step;
     rec.gradient_norm = s.gradient_norm;
+    rec.objective_before = s.energy_before, rec.objective_after = s.energy_after;
+    rec.inverted = a.inverted;
     rec.t_gradient = s.t_gradient + t_reference + std::chrono::duration<double>(Clock::now() - t_analyze).count();
     rec.t_assembly = s.t_assembly, rec.t_factorization = s.t_factorization, rec.t_solve = s.t_solve;
     rec.t_line_search = s.t_line_search;

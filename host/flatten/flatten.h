@@ -43,6 +43,8 @@ struct IterationRecord {
   double t_com = 1;            // eq. (10); 1 when the references are the ideal triangles
   double step = 0, max_step = 0;  // accepted step, maximal non-inverting step
   double gradient_norm = 0;    // of the objective that was minimized, before the step
+  double objective_before = 0, objective_after = 0;  // that objective ((4) or (5)) around the step
+  size_t inverted = 0;         // triangles with det J <= 0 after the step (always 0)
   // Seconds: per-triangle energy, gradient, SVD and references; per-triangle Hessian
   // proxies and sparse assembly; numeric factorization; triangular solves; line search.
   double t_gradient = 0, t_assembly = 0, t_factorization = 0, t_solve = 0, t_line_search = 0, t_total = 0;

@@ -3,6 +3,9 @@
 #include "flatten/symmetric_dirichlet.h"
 
 #include <algorithm>
+#include <cstdlib>
+#include <dlfcn.h>
+#include <mutex>
 
 namespace uvpress::flatten {
 
@@ -11,7 +14,26 @@ namespace {
 constexpr int lower_index(int a, int b) { return a * (a + 1) / 2 + b; }
 }  // namespace
 
+void configure_blas_threads() {
+  static std::once_flag once;
+  std::call_once(once, [] {
+    int n = 1;
+    if (const char* env = std::getenv("UVPRESS_BLAS_THREADS"); env && std::atoi(env) > 0) n = std::atoi(env);
+    // Found at run time: CHOLMOD reaches BLAS and LAPACK through libblas.so.3 and
+    // liblapack.so.3 (Debian alternatives), and OpenBLAS may also be loaded as
+    // libopenblas.so.0 - separate copies with separate thread settings. Set every one.
+    using SetThreads = void (*)(int);
+    for (const char* lib : {"libblas.so.3", "liblapack.so.3", "libopenblas.so.0"})
+      if (void* h = dlopen(lib, RTLD_NOW | RTLD_NOLOAD)) {
+        if (auto set = reinterpret_cast<SetThreads>(dlsym(h, "openblas_set_num_threads"))) set(n);
+        dlclose(h);
+      }
+    if (auto set = reinterpret_cast<SetThreads>(dlsym(RTLD_DEFAULT, "openblas_set_num_threads"))) set(n);
+  });
+}
+
 SparseSystem::SparseSystem(size_t nv, const std::vector<uint32_t>& tris) : n_(2 * nv) {
+  configure_blas_threads();
   const size_t nt = tris.size() / 3;
   // Pattern: every (vertex, vertex) pair of every triangle, 2x2 blocks, lower triangle.
   std::vector<Eigen::Triplet<double>> triplets;

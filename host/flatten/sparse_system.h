@@ -53,6 +53,13 @@ class SparseSystem {
   double diagonal_mean_ = 1;
 };
 
+// Determinism: OpenBLAS splits the supernodal kernels differently for different thread
+// counts, and the factor's bits change with them. uvpress therefore runs BLAS on one
+// thread (openblas_set_num_threads(1), looked up at run time) unless UVPRESS_BLAS_THREADS=N
+// asks for more - faster factorizations on big machines, bit-identical only for equal N.
+// The per-triangle OpenMP loops are bit-identical for any OMP_NUM_THREADS.
+void configure_blas_threads();
+
 // Local 6x6 Hessian from a 4x4 Hessian K in vec(J) = (J00 J01 J10 J11) and Rinv:
 // H[(m,r),(n,s)] = sum_jk c[m][j] K[(r,j),(s,k)] c[n][k], scaled by w. Writes 21 entries.
 void local_hessian(const double* Rinv, const double K[16], double w, double h21[21]);
