@@ -10,7 +10,12 @@ namespace uvpress::engine::cpu {
 
 namespace {
 
-int32_t fixed(float x) { return int32_t(std::floor(x * kFixedPoint + 0.5f)); }
+// x >= 0 here (bilinear weights, luminance), so truncation is floor: the GLSL twin's
+// floor(x * Q + 0.5) gives the same integer, without the slow SSE2 floor emulation.
+int32_t fixed(float x) { return int32_t(x * kFixedPoint + 0.5f); }
+
+// Floor of a non-negative tile coordinate.
+inline uint32_t cell(float a) { return uint32_t(a); }
 
 // Stencil slot of texel b relative to texel a (|di|, |dj| <= 1): 0..8.
 inline uint32_t slot(int32_t di, int32_t dj) { return uint32_t((di + 1) + 3 * (dj + 1)); }
@@ -64,9 +69,8 @@ std::vector<float> bake_tile(const TileMap& m, const float* reference, uint32_t*
   int32_t ref_sum = 0;
   for (size_t k = 0; k < m.pixel.size(); ++k) {
     float a = m.a[k], b = m.b[k];
-    float fa0 = std::floor(a), fb0 = std::floor(b);
-    uint32_t i0 = uint32_t(fa0), j0 = uint32_t(fb0);
-    float fa = a - fa0, fb = b - fb0;
+    uint32_t i0 = cell(a), j0 = cell(b);
+    float fa = a - float(i0), fb = b - float(j0);
     const float wt[4] = {(1.0f - fa) * (1.0f - fb), fa * (1.0f - fb), (1.0f - fa) * fb, fa * fb};
     const int32_t di[4] = {0, 1, 0, 1}, dj[4] = {0, 0, 1, 1};
     const float ref = reference[m.pixel[k]];
@@ -148,9 +152,8 @@ void render_tile(const TileMap& m, const std::vector<float>& tile, uint32_t size
   std::fill(candidate, candidate + size_t(size) * size, 0.0f);
   for (size_t k = 0; k < m.pixel.size(); ++k) {
     float a = m.a[k], b = m.b[k];
-    float fa0 = std::floor(a), fb0 = std::floor(b);
-    uint32_t i0 = uint32_t(fa0), j0 = uint32_t(fb0);
-    float fa = a - fa0, fb = b - fb0;
+    uint32_t i0 = cell(a), j0 = cell(b);
+    float fa = a - float(i0), fb = b - float(j0);
     const float* t0 = &tile[size_t(j0) * m.width + i0];
     const float* t1 = t0 + m.width;
     float top = (1.0f - fa) * t0[0];

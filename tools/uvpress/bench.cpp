@@ -5,10 +5,15 @@
 
 namespace uvpress::cli {
 
-std::vector<Backend> available_backends(bool validation) {
+std::vector<Backend> available_backends(const Globals& g) {
   std::vector<Backend> out;
+  if (g.device != "auto") {
+    auto e = g.make_engine();
+    out.push_back({e->device().backend, std::move(e)});
+    return out;
+  }
   engine::EngineOptions options;
-  options.validation = validation;
+  options.validation = g.validation;
   out.push_back({"cpu", engine::make_cpu_engine(options)});
   for (auto request : {engine::DeviceRequest::Gpu, engine::DeviceRequest::Lavapipe}) {
     try {
@@ -24,6 +29,7 @@ void add_bench(CLI::App& app, Globals& g) {
   auto* bench = app.add_subcommand("bench", "Benchmarks: one JSON line per configuration on stdout");
   bench->require_subcommand(1);
   add_bench_luminance(*bench, g);
+  add_bench_views(*bench, g);
   add_bench_flatten(*bench, g);
 }
 

@@ -14,11 +14,13 @@ struct Backend {
   std::unique_ptr<engine::Engine> engine;
 };
 
-// Every backend this machine has: the native CPU one, then each Vulkan kind present.
-std::vector<Backend> available_backends(bool validation);
+// Every backend this machine has (the native CPU one, then each Vulkan kind present), or
+// only the one --device names when it names one.
+std::vector<Backend> available_backends(const Globals& g);
 
 // One file per benchmark; each adds its subcommand under `bench`.
 void add_bench_luminance(CLI::App& bench, Globals& g);
+void add_bench_views(CLI::App& bench, Globals& g);
 void add_bench_flatten(CLI::App& bench, Globals& g);
 
 }  // namespace uvpress::cli
