@@ -1,0 +1,250 @@
+#include "perceptual/triangle_stage.h"
+
+#include "bo/bayes_opt.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <future>
+#include <limits>
+#include <memory>
+
+namespace uvpress::perceptual {
+
+namespace {
+
+constexpr double kHalfPi = 1.5707963267948966;
+constexpr double kGmsdFloor = 1e-5;  // z = log(GMSD + floor): finite at GMSD = 0
+
+// 12-point Gauss-Hermite rule (physicists'), for E[f(z)], z ~ N(mu, sd^2).
+constexpr double kHermiteNodes[12] = {-3.889724897869782, -3.020637025120890, -2.279507080501060,
+                                      -1.597682635152605, -0.9477883912401637, -0.3142403762543591,
+                                      0.3142403762543591,  0.9477883912401637,  1.597682635152605,
+                                      2.279507080501060,   3.020637025120890,   3.889724897869782};
+constexpr double kHermiteWeights[12] = {2.658551684356302e-07, 8.573687043587859e-05, 0.003905390584629062,
+                                        0.05160798561588393,   0.2604923102641611,    0.5701352362624795,
+                                        0.5701352362624795,    0.2604923102641611,    0.05160798561588393,
+                                        0.003905390584629062,  8.573687043587859e-05, 2.658551684356302e-07};
+
+double barrier(double g, double eps) { return g < eps ? -std::log(eps - g) : std::numeric_limits<double>::infinity(); }
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+// One triangle's optimization state.
+struct Search {
+  uint32_t triangle = 0, view = 0;
+  double area = 0;  // |T| in texels
+  std::unique_ptr<bo::BayesOpt> bo;
+  double x[4] = {0, 0, 0, 0};  // pending proposal
+  double best_f = std::numeric_limits<double>::infinity(), best_g = 0;
+  double best_x[4] = {0, 1, 1, 0};
+  int last_improvement = 0;
+  bool done = false;
+};
+
+double objective(const Search& s, const double x[4], double g, const TriangleStageOptions& o) {
+  double l1, l2;
+  jacobian_of(x, o.lambda_min, nullptr, &l1, &l2);
+  return l1 * l2 * s.area + barrier(g, o.epsilon);
+}
+
+// Expected improvement of the composite objective under z ~ N(mean, sd^2).
+double acquisition(const Search& s, const double* x, double mean, double sd, const TriangleStageOptions& o) {
+  const double log_eps = std::log(o.epsilon + kGmsdFloor);
+  if (!std::isfinite(s.best_f)) return bo::normal_cdf((log_eps - mean) / std::max(sd, 1e-12));
+  double l1, l2;
+  jacobian_of(x, o.lambda_min, nullptr, &l1, &l2);
+  const double area = l1 * l2 * s.area;
+  if (area - std::log(o.epsilon) >= s.best_f) return 0;  // cannot improve even at GMSD = 0
+  double ei = 0;
+  for (int k = 0; k < 12; ++k) {
+    double z = mean + sd * std::sqrt(2.0) * kHermiteNodes[k];
+    double g = std::exp(z) - kGmsdFloor;
+    double f = area + barrier(std::max(g, 0.0), o.epsilon);
+    if (f < s.best_f) ei += kHermiteWeights[k] * (s.best_f - f);
+  }
+  return ei / std::sqrt(M_PI);
+}
+
+void record(Search& s, const double x[4], double g, int evaluation, const TriangleStageOptions& o) {
+  s.bo->observe(x, std::log(std::max(double(g), 0.0) + kGmsdFloor));
+  double f = objective(s, x, g, o);
+  if (f < s.best_f) {
+    if (!std::isfinite(s.best_f) || f < s.best_f - 1e-3 * std::abs(s.best_f)) s.last_improvement = evaluation;
+    s.best_f = f, s.best_g = g;
+    std::copy(x, x + 4, s.best_x);
+  }
+  const int n = int(s.bo->evaluations());
+  if (n >= o.evaluations || (o.early_stop && n >= 30 && n - s.last_improvement >= 25)) s.done = true;
+}
+
+engine::ViewCandidate candidate_of(const Search& s, const double x[4], double lambda_min) {
+  auto j = jacobian_of(x, lambda_min);
+  return {{float(j[0]), float(j[1]), float(j[2]), float(j[3])}, s.view, 0, 0, 0};
+}
+
+std::array<double, 4> rotation(double a) { return {std::cos(a), -std::sin(a), std::sin(a), std::cos(a)}; }
+
+std::array<double, 4> multiply(const std::array<double, 4>& a, const std::array<double, 4>& b) {
+  return {a[0] * b[0] + a[1] * b[2], a[0] * b[1] + a[1] * b[3], a[2] * b[0] + a[3] * b[2], a[2] * b[1] + a[3] * b[3]};
+}
+
+double texel_area(const TriangleViewInput& in, uint32_t t) {
+  const uint32_t* f = &in.indices[3 * t];
+  double W = in.texture_width, H = in.texture_height;
+  double ax = in.uvs[2 * f[0]] * W, ay = in.uvs[2 * f[0] + 1] * H;
+  double bx = in.uvs[2 * f[1]] * W, by = in.uvs[2 * f[1] + 1] * H;
+  double cx = in.uvs[2 * f[2]] * W, cy = in.uvs[2 * f[2] + 1] * H;
+  return 0.5 * std::abs((bx - ax) * (cy - ay) - (cx - ax) * (by - ay));
+}
+
+double variance(const std::vector<float>& v) {
+  double m = 0, s = 0;
+  for (float x : v) m += x;
+  m /= double(v.size());
+  for (float x : v) s += (x - m) * (x - m);
+  return s / double(v.size());
+}
+
+}  // namespace
+
+std::array<double, 4> jacobian_of(const double x[4], double lambda_min, double* alpha, double* lambda1,
+                                  double* lambda2, double* beta) {
+  double a = x[0] * kHalfPi, l1 = lambda_min + x[1] * (1 - lambda_min), l2 = lambda_min + x[2] * (1 - lambda_min),
+         b = x[3] * kHalfPi;
+  if (alpha) *alpha = a;
+  if (lambda1) *lambda1 = l1;
+  if (lambda2) *lambda2 = l2;
+  if (beta) *beta = b;
+  auto V = rotation(b), Vt = rotation(-b);
+  auto S = multiply(multiply(V, {l1, 0, 0, l2}), Vt);
+  return multiply(rotation(a), S);
+}
+
+std::vector<TriangleResult> optimize_triangles(engine::Engine& engine, const TriangleViewInput& input,
+                                               const std::vector<float>& texture, const TriangleStageOptions& o,
+                                               const std::vector<uint32_t>& which, TriangleStageStats* stats) {
+  const auto t_start = Clock::now();
+  TriangleStageStats local;
+  std::vector<uint32_t> all = which;
+  if (all.empty())
+    for (uint32_t t = 0; t < input.triangle_count; ++t) all.push_back(t);
+  std::vector<TriangleResult> results(all.size());
+
+  for (size_t wave_start = 0; wave_start < all.size(); wave_start += o.wave) {
+    const size_t wave_end = std::min(all.size(), wave_start + o.wave);
+    std::vector<uint32_t> wave(all.begin() + long(wave_start), all.begin() + long(wave_end));
+    auto t0 = Clock::now();
+    engine::ViewSetDesc desc = make_triangle_views(input, o.view_size, wave);
+    desc.texture = texture.data(), desc.texture_width = input.texture_width, desc.texture_height = input.texture_height;
+    local.host_seconds += seconds_since(t0);
+    t0 = Clock::now();
+    auto views = engine.prepare_views(desc);
+    local.device_seconds += seconds_since(t0);
+
+    std::vector<Search> searches(wave.size());
+    for (size_t k = 0; k < wave.size(); ++k) {
+      Search& s = searches[k];
+      s.triangle = wave[k], s.view = uint32_t(k), s.area = texel_area(input, wave[k]);
+      bo::BoOptions bo_options;
+      bo_options.dim = 4, bo_options.initial = o.initial;
+      bo_options.seed = o.seed * 1000003ull + wave[k];  // per triangle: independent of waves and threads
+      s.bo = std::make_unique<bo::BayesOpt>(bo_options);
+      const double identity[4] = {0, 1, 1, 0};
+      s.bo->set_initial_point(0, identity);
+    }
+
+    // Lockstep rounds over two halves: while the engine scores one half, the host updates
+    // and proposes for the other (when `overlap`).
+    std::vector<size_t> halves[2];
+    for (size_t k = 0; k < searches.size(); ++k) halves[k % 2].push_back(k);
+    auto propose = [&](std::vector<size_t>& half, std::vector<engine::ViewCandidate>& batch) {
+      half.erase(std::remove_if(half.begin(), half.end(), [&](size_t k) { return searches[k].done; }), half.end());
+      batch.resize(half.size());
+#pragma omp parallel for schedule(static)
+      for (long i = 0; i < long(half.size()); ++i) {
+        Search& s = searches[half[size_t(i)]];
+        s.bo->propose([&](const double* x, double m, double sd) { return acquisition(s, x, m, sd, o); }, s.x);
+        batch[size_t(i)] = candidate_of(s, s.x, o.lambda_min);
+      }
+    };
+    auto update = [&](const std::vector<size_t>& half, const std::vector<float>& scores) {
+#pragma omp parallel for schedule(static)
+      for (long i = 0; i < long(half.size()); ++i) {
+        Search& s = searches[half[size_t(i)]];
+        record(s, s.x, scores[size_t(i)], int(s.bo->evaluations()) + 1, o);
+      }
+    };
+    auto score_async = [&](const std::vector<engine::ViewCandidate>& batch, std::vector<float>& scores) {
+      scores.resize(batch.size());
+      return std::async(o.overlap ? std::launch::async : std::launch::deferred, [&engine, &views, &batch, &scores] {
+        auto t = Clock::now();
+        if (!batch.empty()) engine.score_views(*views, batch.data(), batch.size(), scores.data());
+        return seconds_since(t);
+      });
+    };
+
+    std::vector<engine::ViewCandidate> batch[2];
+    std::vector<float> scores[2];
+    t0 = Clock::now();
+    propose(halves[0], batch[0]);
+    local.host_seconds += seconds_since(t0);
+    while (!halves[0].empty() || !halves[1].empty()) {
+      for (int h = 0; h < 2; ++h) {
+        // batch[h] is proposed; score it while the other half is updated and proposed.
+        auto pending = score_async(batch[h], scores[h]);
+        local.evaluations += batch[h].size();
+        t0 = Clock::now();
+        const int other = 1 - h;
+        if (!batch[other].empty()) update(halves[other], scores[other]);
+        propose(halves[other], batch[other]);
+        local.host_seconds += seconds_since(t0);
+        local.device_seconds += pending.get();
+      }
+      // Half 1's scores are applied in the next pass (as `other` of h = 0).
+      ++local.rounds;
+      if (halves[0].empty() && halves[1].empty()) break;
+    }
+
+    // Results, then the weights of eq. 17 as one more engine batch.
+    std::vector<engine::ViewCandidate> weight_batch;
+    const int K = o.weight_samples;
+    for (size_t k = 0; k < searches.size(); ++k) {
+      Search& s = searches[k];
+      TriangleResult& r = results[wave_start + k];
+      auto j = jacobian_of(s.best_x, o.lambda_min, &r.alpha, &r.lambda1, &r.lambda2, &r.beta);
+      r.jacobian = j;
+      r.rotation = rotation(r.alpha);
+      r.stretch = multiply(multiply(rotation(r.beta), {r.lambda1, 0, 0, r.lambda2}), rotation(-r.beta));
+      r.gmsd = s.best_g, r.objective = s.best_f, r.texel_area = s.area;
+      r.evaluations = int(s.bo->evaluations());
+      for (int q = 0; q < K; ++q) {  // alpha swept, the rest at the optimum
+        double x[4] = {(q + 0.5) / K, s.best_x[1], s.best_x[2], s.best_x[3]};
+        weight_batch.push_back(candidate_of(s, x, o.lambda_min));
+      }
+      double shift[3] = {0.5, 0.5, 0.5};
+      for (int q = 0; q < K; ++q) {  // lambda1, lambda2, beta swept (Halton), alpha at the optimum
+        double h[3];
+        bo::halton(uint64_t(q) + 1, 3, shift, h);
+        double x[4] = {s.best_x[0], h[0], h[1], h[2]};
+        weight_batch.push_back(candidate_of(s, x, o.lambda_min));
+      }
+    }
+    std::vector<float> weight_scores(weight_batch.size());
+    t0 = Clock::now();
+    engine.score_views(*views, weight_batch.data(), weight_batch.size(), weight_scores.data());
+    local.device_seconds += seconds_since(t0);
+    local.evaluations += weight_batch.size();
+    for (size_t k = 0; k < searches.size(); ++k) {
+      auto first = weight_scores.begin() + long(k) * 2 * K;
+      results[wave_start + k].weight_rotation = variance(std::vector<float>(first, first + K));
+      results[wave_start + k].weight_stretch = variance(std::vector<float>(first + K, first + 2 * K));
+    }
+  }
+  local.wall_seconds = seconds_since(t_start);
+  if (stats) *stats = local;
+  return results;
+}
+
+}  // namespace uvpress::perceptual

@@ -1,0 +1,71 @@
+// The triangle-wise optimization of the perceptual-loss paper (section 4.1.2, eq. 12-14,
+// weights eq. 17): for every triangle, Bayesian optimization of its Jacobian
+//   J = R(alpha) V(beta) diag(lambda1, lambda2) V(beta)^T,
+//   alpha, beta in [0, pi/2), lambda in [lambda_min, 1]   (the 90-degree symmetries)
+// minimizing lambda1 lambda2 |T| + L_eps(GMSD), L_eps(x) = -log(eps - x), infinite for
+// x >= eps, with |T| the triangle's area in source texels. All triangles advance in
+// lockstep, one candidate each per round, scored by the engine in one batch.
+//
+// The barrier never reaches the GP: the GP models z = log(GMSD + 1e-5), which is smooth
+// and finite, and the acquisition is the expected improvement of the true objective
+// under that posterior (Gauss-Hermite quadrature over z), in which outcomes with
+// GMSD >= eps improve nothing. Until a feasible point is known it maximizes the
+// probability of feasibility; the first initial point is the identity (always feasible).
+#pragma once
+
+#include "engine.h"
+#include "perceptual/triangle_view.h"
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+namespace uvpress::perceptual {
+
+struct TriangleStageOptions {
+  uint32_t view_size = 64;
+  double epsilon = 0.01;       // GMSD bound (eq. 12)
+  int evaluations = 100;       // per triangle, initial design included
+  int initial = 10;
+  bool early_stop = true;      // leave the batch when the best objective stalls
+  double lambda_min = 0.05;
+  uint32_t wave = 2048;        // triangles optimized together (bounds memory)
+  int weight_samples = 8;      // per weight of eq. 17
+  uint64_t seed = 1;
+  bool overlap = true;         // two half-batches in flight: host proposes while the engine scores
+};
+
+struct TriangleResult {
+  double alpha = 0, lambda1 = 1, lambda2 = 1, beta = 0;
+  std::array<double, 4> jacobian{1, 0, 0, 1};  // row-major, texel space
+  std::array<double, 4> rotation{1, 0, 0, 1};  // R-bar
+  std::array<double, 4> stretch{1, 0, 0, 1};   // S-bar
+  double gmsd = 0;         // of the best point
+  double objective = 0;    // lambda1 lambda2 |T| + L_eps(gmsd)
+  double texel_area = 0;   // |T|
+  int evaluations = 0;
+  double weight_rotation = 0, weight_stretch = 0;  // w_R, w_S (eq. 17)
+};
+
+struct TriangleStageStats {
+  double host_seconds = 0;    // proposing and updating
+  double device_seconds = 0;  // inside the engine's scoring calls
+  double wall_seconds = 0;
+  size_t evaluations = 0;
+  size_t rounds = 0;
+};
+
+// J for a point of the unit box (alpha, lambda1, lambda2, beta mapped to their ranges).
+std::array<double, 4> jacobian_of(const double x[4], double lambda_min, double* alpha = nullptr,
+                                  double* lambda1 = nullptr, double* lambda2 = nullptr, double* beta = nullptr);
+
+// Optimizes `triangles` (all when empty) of the mesh in `input`, sampling `texture`
+// (luminance, input.texture_width x texture_height). Deterministic for a given seed,
+// whatever the thread count and the engine.
+std::vector<TriangleResult> optimize_triangles(engine::Engine& engine, const TriangleViewInput& input,
+                                               const std::vector<float>& texture,
+                                               const TriangleStageOptions& options,
+                                               const std::vector<uint32_t>& triangles = {},
+                                               TriangleStageStats* stats = nullptr);
+
+}  // namespace uvpress::perceptual
