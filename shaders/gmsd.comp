@@ -3,7 +3,7 @@
 #extension GL_GOOGLE_include_directive : require
 #include "layout.h"
 
-layout(local_size_x = 256) in;
+layout(local_size_x_id = 0) in;  // the engine's workgroup size (a multiple of 8)
 layout(std430, binding = 0) readonly buffer A { float image_a[]; };
 layout(std430, binding = 1) readonly buffer B { float image_b[]; };
 layout(std430, binding = 2) writeonly buffer Out { float result[]; };

@@ -1,44 +1,83 @@
-// GMSD for one image pair per workgroup of 256 invocations, term for term as
-// engine/cpu/gmsd.h (Real = float). Images up to 64 x 64. The including shader defines
+// GMSD for one image pair per workgroup, term for term as engine/cpu/gmsd.h (Real = float).
+// Images up to 64 x 64. The including shader declares its workgroup size with
+// local_size_x_id = 0 (a multiple of 8, at most 1024) and defines
 //   float gmsd_a(int x, int y);  float gmsd_b(int x, int y);
-// returning 0 outside the image. Sums are fixed-order trees: deterministic per device.
+// for 0 <= x < width + 1, 0 <= y < height + 1, returning 0 outside the image. Sums are
+// fixed-order (see wg_sum): deterministic per device and workgroup size.
 #ifndef UVPRESS_GMSD_GLSL
 #define UVPRESS_GMSD_GLSL
 
-#define GMSD_WG 256u
+#define WG gl_WorkGroupSize.x
 
-shared float s_d1[1024];
-shared float s_d2[1024];
+// Downsampled images in zero-padded tiles (a one-pixel border of zeros), so the Prewitt
+// stencil reads without bounds checks or branches; the GMS map.
+#define GMSD_PAD (34u * 34u)
+shared float s_d1[GMSD_PAD];
+shared float s_d2[GMSD_PAD];
 shared float s_gms[1024];
-shared float s_red[GMSD_WG];
+
+// Workgroup reductions: every invocation writes its partial, the first WG/8 invocations
+// each add 8 consecutive partials in order, then every invocation adds those WG/8 sums in
+// order. Two barriers; the buffers alternate between calls, so back-to-back reductions
+// need no trailing barrier. Every invocation must call (uniform control flow).
+shared vec4 s_red[2][WG];
+shared vec4 s_red8[2][WG / 8u];
+uint g_red_parity = 0u;
+
+vec4 wg_sum4(vec4 v) {
+  uint tid = gl_LocalInvocationIndex, b = g_red_parity;
+  g_red_parity ^= 1u;
+  s_red[b][tid] = v;
+  barrier();
+  if (tid < WG / 8u) {
+    precise vec4 s = s_red[b][8u * tid];
+    for (uint k = 1u; k < 8u; ++k) s += s_red[b][8u * tid + k];
+    s_red8[b][tid] = s;
+  }
+  barrier();
+  precise vec4 s = s_red8[b][0];
+  for (uint k = 1u; k < WG / 8u; ++k) s += s_red8[b][k];
+  return s;
+}
+
+vec4 wg_min4(vec4 v) {
+  uint tid = gl_LocalInvocationIndex, b = g_red_parity;
+  g_red_parity ^= 1u;
+  s_red[b][tid] = v;
+  barrier();
+  if (tid < WG / 8u) {
+    vec4 s = s_red[b][8u * tid];
+    for (uint k = 1u; k < 8u; ++k) s = min(s, s_red[b][8u * tid + k]);
+    s_red8[b][tid] = s;
+  }
+  barrier();
+  vec4 s = s_red8[b][0];
+  for (uint k = 1u; k < WG / 8u; ++k) s = min(s, s_red8[b][k]);
+  return s;
+}
+
+float workgroup_sum(float v) { return wg_sum4(vec4(v, 0.0, 0.0, 0.0)).x; }
 
 float gmsd_a(int x, int y);
 float gmsd_b(int x, int y);
 
-// Sum of v over the workgroup; every invocation must call it (uniform control flow).
-float workgroup_sum(float v) {
-  uint tid = gl_LocalInvocationIndex;
-  s_red[tid] = v;
-  barrier();
-  for (uint s = GMSD_WG / 2u; s > 0u; s >>= 1u) {
-    if (tid < s) s_red[tid] += s_red[tid + s];
-    barrier();
+float gmsd_magnitude(uint which, uint c, uint W2) {
+  // c: the centre's index in the padded tile of row length W2.
+  float a00, a10, a20, a01, a21, a02, a12, a22;
+  if (which == 0u) {
+    a00 = s_d1[c - W2 - 1u]; a10 = s_d1[c - W2]; a20 = s_d1[c - W2 + 1u];
+    a01 = s_d1[c - 1u];                          a21 = s_d1[c + 1u];
+    a02 = s_d1[c + W2 - 1u]; a12 = s_d1[c + W2]; a22 = s_d1[c + W2 + 1u];
+  } else {
+    a00 = s_d2[c - W2 - 1u]; a10 = s_d2[c - W2]; a20 = s_d2[c - W2 + 1u];
+    a01 = s_d2[c - 1u];                          a21 = s_d2[c + 1u];
+    a02 = s_d2[c + W2 - 1u]; a12 = s_d2[c + W2]; a22 = s_d2[c + W2 + 1u];
   }
-  float r = s_red[0];
-  barrier();
-  return r;
-}
-
-float gmsd_d(uint which, int x, int y, int w, int h) {
-  if (x < 0 || y < 0 || x >= w || y >= h) return 0.0;
-  return which == 0u ? s_d1[y * w + x] : s_d2[y * w + x];
-}
-
-float gmsd_magnitude(uint which, int i, int j, int w, int h) {
-  precise float gx = (gmsd_d(which, i + 1, j - 1, w, h) + gmsd_d(which, i + 1, j, w, h)) + gmsd_d(which, i + 1, j + 1, w, h);
-  gx -= (gmsd_d(which, i - 1, j - 1, w, h) + gmsd_d(which, i - 1, j, w, h)) + gmsd_d(which, i - 1, j + 1, w, h);
-  precise float gy = (gmsd_d(which, i - 1, j + 1, w, h) + gmsd_d(which, i, j + 1, w, h)) + gmsd_d(which, i + 1, j + 1, w, h);
-  gy -= (gmsd_d(which, i - 1, j - 1, w, h) + gmsd_d(which, i, j - 1, w, h)) + gmsd_d(which, i + 1, j - 1, w, h);
+  // Padding zeros stand for the CPU's out-of-range zeros: the same sums, term for term.
+  precise float gx = (a20 + a21) + a22;
+  gx -= (a00 + a01) + a02;
+  precise float gy = (a02 + a12) + a22;
+  gy -= (a00 + a10) + a20;
   const float third = 1.0 / 3.0;
   gx *= third;
   gy *= third;
@@ -51,23 +90,29 @@ float gmsd_run(uint width, uint height) {
   uint tid = gl_LocalInvocationIndex;
   int w = int((width + 1u) / 2u), h = int((height + 1u) / 2u);
   uint n = uint(w * h);
-  for (uint k = tid; k < n; k += GMSD_WG) {
-    int i = int(k) % w, j = int(k) / w;
-    precise float s1 = gmsd_a(2 * i, 2 * j) + gmsd_a(2 * i + 1, 2 * j);
-    s1 += gmsd_a(2 * i, 2 * j + 1);
-    s1 += gmsd_a(2 * i + 1, 2 * j + 1);
-    precise float s2 = gmsd_b(2 * i, 2 * j) + gmsd_b(2 * i + 1, 2 * j);
-    s2 += gmsd_b(2 * i, 2 * j + 1);
-    s2 += gmsd_b(2 * i + 1, 2 * j + 1);
-    s_d1[k] = 0.25 * s1;
-    s_d2[k] = 0.25 * s2;
+  uint W2 = uint(w) + 2u, padded = W2 * uint(h + 2);
+  for (uint k = tid; k < padded; k += WG) {
+    int i = int(k % W2) - 1, j = int(k / W2) - 1;
+    float d1 = 0.0, d2 = 0.0;
+    if (i >= 0 && j >= 0 && i < w && j < h) {
+      precise float s1 = gmsd_a(2 * i, 2 * j) + gmsd_a(2 * i + 1, 2 * j);
+      s1 += gmsd_a(2 * i, 2 * j + 1);
+      s1 += gmsd_a(2 * i + 1, 2 * j + 1);
+      precise float s2 = gmsd_b(2 * i, 2 * j) + gmsd_b(2 * i + 1, 2 * j);
+      s2 += gmsd_b(2 * i, 2 * j + 1);
+      s2 += gmsd_b(2 * i + 1, 2 * j + 1);
+      d1 = 0.25 * s1;
+      d2 = 0.25 * s2;
+    }
+    s_d1[k] = d1;
+    s_d2[k] = d2;
   }
   barrier();
   const float T = 170.0 / (255.0 * 255.0);
   precise float part = 0.0;
-  for (uint k = tid; k < n; k += GMSD_WG) {
-    int i = int(k) % w, j = int(k) / w;
-    float g1 = gmsd_magnitude(0u, i, j, w, h), g2 = gmsd_magnitude(1u, i, j, w, h);
+  for (uint k = tid; k < n; k += WG) {
+    uint c = (k / uint(w) + 1u) * W2 + k % uint(w) + 1u;
+    float g1 = gmsd_magnitude(0u, c, W2), g2 = gmsd_magnitude(1u, c, W2);
     precise float num = 2.0 * g1 * g2;
     num += T;
     precise float den = g1 * g1;
@@ -79,7 +124,7 @@ float gmsd_run(uint width, uint height) {
   }
   float mean = workgroup_sum(part) / float(n);
   precise float var = 0.0;
-  for (uint k = tid; k < n; k += GMSD_WG) {
+  for (uint k = tid; k < n; k += WG) {
     float d = s_gms[k] - mean;
     var += d * d;
   }

@@ -8,7 +8,7 @@
 #include "layout.h"
 #include "view_raster.glsl"
 
-layout(local_size_x = 256) in;
+layout(local_size_x_id = 0) in;  // the engine's workgroup size (a multiple of 8)
 layout(std430, binding = 0) readonly buffer Views { ViewDesc views[]; };
 layout(std430, binding = 1) readonly buffer Triangles { ViewTriangle triangles[]; };
 layout(std430, binding = 2) readonly buffer Candidates { ViewCandidate candidates[]; };
@@ -49,19 +49,6 @@ shared vec3 s_t[kViewMaxTriangles];
 shared int s_ref_sum;
 shared uint s_count;
 
-float workgroup_min(float v) {
-  uint tid = gl_LocalInvocationIndex;
-  s_red[tid] = v;
-  barrier();
-  for (uint s = GMSD_WG / 2u; s > 0u; s >>= 1u) {
-    if (tid < s) s_red[tid] = min(s_red[tid], s_red[tid + s]);
-    barrier();
-  }
-  float r = s_red[0];
-  barrier();
-  return r;
-}
-
 uint cover_at(uint pix) { return (coverage[g_cov_base + pix / 4u] >> (8u * (pix % 4u))) & 0xffu; }
 
 uint stencil_slot(int di, int dj) { return uint((di + 1) + 3 * (dj + 1)); }
@@ -90,17 +77,17 @@ void main() {
   g_slot = gl_WorkGroupID.x * kSlot;
   g_ref_base = local_view * npix;
   g_cov_base = local_view * npix / 4u;
-  if (tid < view.triangle_count) {
-    ViewTriangle t = triangles[view.first_triangle + tid];
-    s_s[tid] = vec3(t.s[0], t.s[1], t.s[2]);
-    s_t[tid] = vec3(t.t[0], t.t[1], t.t[2]);
+  for (uint k = tid; k < view.triangle_count; k += WG) {
+    ViewTriangle t = triangles[view.first_triangle + k];
+    s_s[k] = vec3(t.s[0], t.s[1], t.s[2]);
+    s_t[k] = vec3(t.t[0], t.t[1], t.t[2]);
   }
   if (tid == 0u) { s_ref_sum = 0; s_count = 0u; }
   barrier();
 
   // 1. Map covered pixels through J: (s, t) - centre, then J.
   float u_lo = 1e30, u_hi = -1e30, v_lo = 1e30, v_hi = -1e30;
-  for (uint pix = tid; pix < npix; pix += 256u) {
+  for (uint pix = tid; pix < npix; pix += WG) {
     uint k = cover_at(pix);
     if (k == kNoTriangle) continue;
     float cx = float(int(pix) % S) + 0.5, cy = float(int(pix) / S) + 0.5;
@@ -115,8 +102,8 @@ void main() {
     set_sf(OFF_V + pix, pv);
     u_lo = min(u_lo, pu); u_hi = max(u_hi, pu); v_lo = min(v_lo, pv); v_hi = max(v_hi, pv);
   }
-  u_lo = workgroup_min(u_lo); u_hi = -workgroup_min(-u_hi);
-  v_lo = workgroup_min(v_lo); v_hi = -workgroup_min(-v_hi);
+  vec4 box = wg_min4(vec4(u_lo, -u_hi, v_lo, -v_hi));
+  u_lo = box.x; u_hi = -box.y; v_lo = box.z; v_hi = -box.w;
   bool empty = u_lo > u_hi;
 
   // 2. Tile: a power-of-two lattice keeps it within kTileMax texels a side.
@@ -127,13 +114,15 @@ void main() {
   int w = empty ? 1 : int(floor(u_hi * inv) - ou) + 2;
   int h = empty ? 1 : int(floor(v_hi * inv) - ov) + 2;
   uint n = uint(w * h);
-  for (uint q = tid; q < n * 9u; q += 256u) scratch[g_slot + OFF_K + q] = 0u;
-  for (uint q = tid; q < n; q += 256u) scratch[g_slot + OFF_R + q] = 0u;
+  for (uint q = tid; q < n * 9u; q += WG) scratch[g_slot + OFF_K + q] = 0u;
+  for (uint q = tid; q < n; q += WG) scratch[g_slot + OFF_R + q] = 0u;
   memoryBarrierBuffer();
   barrier();
 
   // 3. Normal equations A^T A and A^T ref, integer sums (order-free, exact).
-  for (uint pix = tid; pix < npix; pix += 256u) {
+  int my_ref_sum = 0;
+  uint my_count = 0u;
+  for (uint pix = tid; pix < npix; pix += WG) {
     if (cover_at(pix) == kNoTriangle) continue;
     float a = sf(OFF_U + pix) * inv - ou, b = sf(OFF_V + pix) * inv - ov;
     set_sf(OFF_U + pix, a);
@@ -144,8 +133,8 @@ void main() {
     float wt[4] = float[4]((1.0 - fa) * (1.0 - fb), fa * (1.0 - fb), (1.0 - fa) * fb, fa * fb);
     const int di[4] = int[4](0, 1, 0, 1), dj[4] = int[4](0, 0, 1, 1);
     float ref = reference[g_ref_base + pix];
-    atomicAdd(s_ref_sum, fixed_point(ref));
-    atomicAdd(s_count, 1u);
+    my_ref_sum += fixed_point(ref);
+    ++my_count;
     for (int q = 0; q < 4; ++q) {
       uint row = (j0 + uint(dj[q])) * uint(w) + i0 + uint(di[q]);
       atomicAdd(scratch[g_slot + OFF_R + row], uint(fixed_point(wt[q] * ref)));
@@ -154,6 +143,8 @@ void main() {
                   uint(fixed_point(wt[q] * wt[r])));
     }
   }
+  atomicAdd(s_ref_sum, my_ref_sum);
+  atomicAdd(s_count, my_count);
   memoryBarrierBuffer();
   barrier();
 
@@ -162,7 +153,7 @@ void main() {
   float mean = empty ? 0.0 : float(s_ref_sum) / (kFixedPoint * count);
   float mu = kSmoothness * count / float(n);
   const float inv_q = 1.0 / kFixedPoint;
-  for (uint t = tid; t < n; t += 256u) {
+  for (uint t = tid; t < n; t += WG) {
     int rowsum = 0;
     int ti = int(t) % w, tj = int(t) / w;
     for (uint s = 0u; s < 9u; ++s) {
@@ -184,58 +175,53 @@ void main() {
   memoryBarrierBuffer();
   barrier();
 
-  // 5. Jacobi-preconditioned CG from x = 0 (the same iteration as the CPU backend).
-  precise float part = 0.0;
-  for (uint t = tid; t < n; t += 256u) part += sf(OFF_R + t) * sf(OFF_R + t);
-  float bb = workgroup_sum(part);
+  // 5. Jacobi-preconditioned CG from x = 0: the CPU backend's iteration, with the vector
+  // updates fused into the loops that feed the next dot products (two reductions and one
+  // barrier per iteration; z = r / diag is formed where it is used).
+  precise float part = 0.0, part2 = 0.0;
+  for (uint t = tid; t < n; t += WG) {
+    float r = sf(OFF_R + t), z = r / sf(OFF_DIAG + t);
+    set_sf(OFF_P + t, z);
+    part += r * r;
+    part2 += r * z;
+  }
+  memoryBarrierBuffer();
+  vec4 sums = wg_sum4(vec4(part, part2, 0.0, 0.0));
+  float bb = sums.x, rz = sums.y;
   if (bb > 0.0) {
-    part = 0.0;
-    for (uint t = tid; t < n; t += 256u) {
-      float z = sf(OFF_R + t) / sf(OFF_DIAG + t);
-      set_sf(OFF_Z + t, z);
-      set_sf(OFF_P + t, z);
-      part += sf(OFF_R + t) * z;
-    }
-    float rz = workgroup_sum(part);
     float stop = kTolerance * kTolerance * bb;
-    memoryBarrierBuffer();
-    barrier();
     for (uint it = 0u; it < kMaxIterations; ++it) {
       part = 0.0;
-      for (uint t = tid; t < n; t += 256u) {
+      for (uint t = tid; t < n; t += WG) {
         float ap = apply_row(t, w, h, OFF_P);
         set_sf(OFF_AP + t, ap);
         part += sf(OFF_P + t) * ap;
       }
       float alpha = rz / workgroup_sum(part);
       part = 0.0;
-      for (uint t = tid; t < n; t += 256u) {
+      part2 = 0.0;
+      for (uint t = tid; t < n; t += WG) {
         set_sf(OFF_X + t, sf(OFF_X + t) + alpha * sf(OFF_P + t));
         float r = sf(OFF_R + t) - alpha * sf(OFF_AP + t);
         set_sf(OFF_R + t, r);
         part += r * r;
+        part2 += r * (r / sf(OFF_DIAG + t));
       }
-      if (workgroup_sum(part) <= stop) break;
-      part = 0.0;
-      for (uint t = tid; t < n; t += 256u) {
-        float z = sf(OFF_R + t) / sf(OFF_DIAG + t);
-        set_sf(OFF_Z + t, z);
-        part += sf(OFF_R + t) * z;
-      }
-      float rz_next = workgroup_sum(part);
-      float beta = rz_next / rz;
-      rz = rz_next;
-      for (uint t = tid; t < n; t += 256u) set_sf(OFF_P + t, sf(OFF_Z + t) + beta * sf(OFF_P + t));
+      sums = wg_sum4(vec4(part, part2, 0.0, 0.0));
+      if (sums.x <= stop) break;
+      float beta = sums.y / rz;
+      rz = sums.y;
+      for (uint t = tid; t < n; t += WG) set_sf(OFF_P + t, sf(OFF_R + t) / sf(OFF_DIAG + t) + beta * sf(OFF_P + t));
       memoryBarrierBuffer();
       barrier();
     }
   }
-  for (uint t = tid; t < n; t += 256u) set_sf(OFF_X + t, sf(OFF_X + t) + mean);
+  for (uint t = tid; t < n; t += WG) set_sf(OFF_X + t, sf(OFF_X + t) + mean);
   memoryBarrierBuffer();
   barrier();
 
   // 6. Bilinear render of the tile; empty pixels stay 0 as in the reference.
-  for (uint pix = tid; pix < npix; pix += 256u) {
+  for (uint pix = tid; pix < npix; pix += WG) {
     float value = 0.0;
     if (cover_at(pix) != kNoTriangle) {
       float a = sf(OFF_U + pix), b = sf(OFF_V + pix);

@@ -11,6 +11,7 @@
 #include "view_score.spv.h"
 
 #include <algorithm>
+#include <cstdlib>
 #include <cstring>
 #include <memory>
 #include <string>
@@ -28,6 +29,19 @@ constexpr uint64_t kScoreSlotBytes =
     4ull * (3 * shader::kViewMaxSize * shader::kViewMaxSize + 15 * shader::kTileMax * shader::kTileMax);
 constexpr uint32_t kScoreChunk = 1024;  // candidates per submit, at most
 constexpr uint32_t kWorkgroup = 256;
+
+// Workgroup size of the one-workgroup-per-item kernels (view_score, gmsd): a multiple of 8.
+// GPUs want many invocations; lavapipe runs a workgroup on one thread, 8 lanes at a time,
+// and switches between its 8-lane slices at every barrier, so there the smallest
+// workgroup (one slice, 8) is fastest. UVPRESS_VIEW_WORKGROUP overrides (benchmarks).
+uint32_t item_workgroup(const vk::Context& context) {
+  if (const char* e = std::getenv("UVPRESS_VIEW_WORKGROUP")) {
+    const long v = std::strtol(e, nullptr, 10);
+    if (v >= 8 && v <= 1024 && v % 8 == 0) return uint32_t(v);
+    throw EngineError("UVPRESS_VIEW_WORKGROUP must be a multiple of 8 in 8..1024");
+  }
+  return context.info().type == "cpu" ? 8 : kWorkgroup;
+}
 
 // A view set on the device: descriptors and triangles whole, coverage and reference
 // renders in pages of views that each fit one buffer.
@@ -58,9 +72,10 @@ class VulkanEngine final : public Engine {
         luminance_(context_, luminance_spv, sizeof(luminance_spv), 2, sizeof(ImageBatchPush), kLocal, kLocal),
         downsample_(context_, downsample2x2_spv, sizeof(downsample2x2_spv), 2, sizeof(ImageBatchPush), kLocal,
                     kLocal),
-        gmsd_(context_, gmsd_spv, sizeof(gmsd_spv), 3, sizeof(GmsdPush), kWorkgroup, 1),
+        gmsd_(context_, gmsd_spv, sizeof(gmsd_spv), 3, sizeof(GmsdPush), item_workgroup(context_), 1),
         view_prepare_(context_, view_prepare_spv, sizeof(view_prepare_spv), 5, sizeof(ViewPush), kWorkgroup, 1),
-        view_score_(context_, view_score_spv, sizeof(view_score_spv), 7, sizeof(ViewPush), kWorkgroup, 1),
+        view_score_(context_, view_score_spv, sizeof(view_score_spv), 7, sizeof(ViewPush), item_workgroup(context_),
+                    1),
         sequence_(context_) {}
 
   DeviceInfo device() const override { return context_.info(); }
