@@ -22,7 +22,7 @@ double gaussian(uint64_t& s) {
 
 // Refits after these many observations: often early, when the model changes most.
 bool refit_now(size_t n) {
-  static const size_t schedule[] = {6, 10, 14, 20, 28, 38, 50, 65, 80, 95};
+  static const size_t schedule[] = {10, 16, 25, 38, 55, 80};
   return std::find(std::begin(schedule), std::end(schedule), n) != std::end(schedule);
 }
 
@@ -74,50 +74,53 @@ void BayesOpt::propose(const Acquisition& acq, double* x) {
     std::copy(&design_[n * size_t(dim)], &design_[n * size_t(dim)] + dim, x);
     return;
   }
-  auto score = [&](const double* p) {
-    double mean, var;
-    gp_.predict(p, &mean, &var);
-    return acq(p, mean, std::sqrt(var));
+  // Scores a batch of points with one GP prediction (one triangular solve for all).
+  std::vector<double> mean, var;
+  auto score = [&](const std::vector<double>& pts, std::vector<double>& out) {
+    const size_t m = pts.size() / size_t(dim);
+    mean.resize(m), var.resize(m), out.resize(m);
+    gp_.predict(pts.data(), m, mean.data(), var.data());
+    for (size_t q = 0; q < m; ++q) out[q] = acq(&pts[q * size_t(dim)], mean[q], std::sqrt(var[q]));
   };
+  // The `keep` best of a scored batch, best first (ties: the earlier point).
+  auto top = [&](const std::vector<double>& values, size_t keep) {
+    std::vector<size_t> order(values.size());
+    for (size_t q = 0; q < order.size(); ++q) order[q] = q;
+    std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return values[a] > values[b]; });
+    order.resize(std::min(keep, order.size()));
+    return order;
+  };
+
   // Quasi-random candidates, shifted anew every round.
   double shift[kMaxDim];
   for (int d = 0; d < dim; ++d) shift[d] = uniform(rng_);
-  struct Scored {
-    double value;
-    std::array<double, kMaxDim> p;
-  };
-  std::vector<Scored> best;  // the top `refine`, best first
-  auto consider = [&](const double* p) {
-    Scored s{score(p), {}};
-    std::copy(p, p + dim, s.p.begin());
-    if (int(best.size()) < std::max(o_.refine, 1) || s.value > best.back().value) {
-      best.push_back(s);
-      std::sort(best.begin(), best.end(), [](const Scored& a, const Scored& b) { return a.value > b.value; });
-      if (int(best.size()) > std::max(o_.refine, 1)) best.pop_back();
+  std::vector<double> pts(size_t(o_.candidates) * size_t(dim)), values;
+  for (int k = 0; k < o_.candidates; ++k) halton(uint64_t(k) + 1 + 7919 * n, dim, shift, &pts[size_t(k) * size_t(dim)]);
+  score(pts, values);
+  std::vector<size_t> seeds = top(values, size_t(std::max(o_.refine, 1)));
+  std::vector<double> best_p(&pts[seeds[0] * size_t(dim)], &pts[seeds[0] * size_t(dim)] + dim);
+  double best_v = values[seeds[0]];
+  std::vector<std::vector<double>> centres;
+  for (size_t s : seeds) centres.emplace_back(&pts[s * size_t(dim)], &pts[s * size_t(dim)] + dim);
+
+  // Local refinement in two batched passes: Gaussian steps around the best few, then
+  // finer steps around the best of all.
+  for (int pass = 0; pass < 2; ++pass) {
+    const double sigma = pass == 0 ? o_.refine_sigma : o_.refine_sigma / 4;
+    std::vector<double> local;
+    for (const auto& c : centres)
+      for (int step = 0; step < o_.refine_steps; ++step)
+        for (int d = 0; d < dim; ++d)
+          local.push_back(std::min(1.0, std::max(0.0, c[size_t(d)] + sigma * gaussian(rng_))));
+    score(local, values);
+    size_t b = top(values, 1)[0];
+    if (values[b] > best_v) {
+      best_v = values[b];
+      best_p.assign(&local[b * size_t(dim)], &local[b * size_t(dim)] + dim);
     }
-  };
-  double p[kMaxDim];
-  for (int k = 0; k < o_.candidates; ++k) {
-    halton(uint64_t(k) + 1 + 7919 * n, dim, shift, p);
-    consider(p);
+    centres = {best_p};
   }
-  // Local refinement: Gaussian steps around the best few, kept when they improve.
-  const size_t seeds = best.size();
-  for (size_t s = 0; s < seeds; ++s) {
-    Scored cur = best[s];
-    for (int step = 0; step < o_.refine_steps; ++step) {
-      double q[kMaxDim];
-      for (int d = 0; d < dim; ++d)
-        q[d] = std::min(1.0, std::max(0.0, cur.p[size_t(d)] + o_.refine_sigma * gaussian(rng_)));
-      double v = score(q);
-      if (v > cur.value) {
-        cur.value = v;
-        std::copy(q, q + dim, cur.p.begin());
-      }
-    }
-    if (cur.value > best[0].value) best[0] = cur;
-  }
-  std::copy(best[0].p.begin(), best[0].p.begin() + dim, x);
+  std::copy(best_p.begin(), best_p.end(), x);
 }
 
 }  // namespace uvpress::bo

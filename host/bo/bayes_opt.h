@@ -17,11 +17,11 @@ namespace uvpress::bo {
 struct BoOptions {
   int dim = 2;
   int initial = 10;           // space-filling points before the GP guides
-  int candidates = 128;       // quasi-random acquisition candidates per round
+  int candidates = 96;        // quasi-random acquisition candidates per round
   int refine = 3;             // best candidates refined locally...
-  int refine_steps = 12;      // ...by this many Gaussian perturbations each
+  int refine_steps = 8;       // ...by this many Gaussian perturbations each, twice
   double refine_sigma = 0.05;
-  int fit_evals = 60;         // likelihood evaluations per hyperparameter refit
+  int fit_evals = 40;         // likelihood evaluations per hyperparameter refit
   uint64_t seed = 1;
 };
 

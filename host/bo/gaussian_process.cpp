@@ -1,5 +1,6 @@
 #include "bo/gaussian_process.h"
 
+#include <Eigen/Cholesky>
 #include <nlopt.hpp>
 
 #include <algorithm>
@@ -21,105 +22,109 @@ GaussianProcess::GaussianProcess(int dim) : dim_(dim) {
 
 void GaussianProcess::set_hyper(const GpHyperparameters& h) {
   hyper_ = h;
-  for (int d = 0; d < dim_; ++d) inv_length2_[size_t(d)] = std::exp(-2 * h.log_length[size_t(d)]);
+  for (int d = 0; d < dim_; ++d) inv_length_[size_t(d)] = std::exp(-h.log_length[size_t(d)]);
   signal2_ = std::exp(2 * h.log_signal);
   noise2_ = std::exp(2 * h.log_noise);
+  rescale();
   refactor();
+}
+
+void GaussianProcess::rescale() {
+  xs_.resize(x_.size());
+  for (size_t i = 0; i < x_.size(); ++i) xs_[i] = x_[i] * inv_length_[i % size_t(dim_)];
 }
 
 double GaussianProcess::kernel(const double* a, const double* b) const {
   double r2 = 0;
   for (int d = 0; d < dim_; ++d) {
     double t = a[d] - b[d];
-    r2 += t * t * inv_length2_[size_t(d)];
+    r2 += t * t;
   }
   const double r = std::sqrt(5.0 * r2);  // sqrt(5) r
   return signal2_ * (1 + r + r * r / 3) * std::exp(-r);
 }
 
 void GaussianProcess::solve_alpha() {
-  const size_t n = y_.size();
-  alpha_.resize(n);
-  for (size_t i = 0; i < n; ++i) {  // L z = y
-    double s = (y_[i] - y_mean_) / y_scale_;
-    for (size_t j = 0; j < i; ++j) s -= L(i, j) * alpha_[j];
-    alpha_[i] = s / L(i, i);
-  }
-  for (size_t i = n; i-- > 0;) {  // L^T alpha = z
-    double s = alpha_[i];
-    for (size_t j = i + 1; j < n; ++j) s -= L(j, i) * alpha_[j];
-    alpha_[i] = s / L(i, i);
-  }
+  const Eigen::Index n = Eigen::Index(y_.size());
+  Eigen::VectorXd r(n);
+  for (Eigen::Index i = 0; i < n; ++i) r(i) = (y_[size_t(i)] - y_mean_) / y_scale_;
+  auto L = chol_.topLeftCorner(n, n).triangularView<Eigen::Lower>();
+  L.solveInPlace(r);
+  L.transpose().solveInPlace(r);
+  alpha_ = r;
 }
 
 void GaussianProcess::refactor() {
-  const size_t n = y_.size();
-  chol_.assign(n * (n + 1) / 2, 0.0);
-  factor_ok_ = true;
-  for (size_t i = 0; i < n; ++i)
-    for (size_t j = 0; j <= i; ++j) {
-      double s = kernel(&x_[i * size_t(dim_)], &x_[j * size_t(dim_)]);
-      if (i == j) s += noise2_ + kJitter;
-      for (size_t k = 0; k < j; ++k) s -= L(i, k) * L(j, k);
-      if (i == j) {
-        if (s <= 0) factor_ok_ = false, s = kJitter;
-        L(i, i) = std::sqrt(s);
-      } else {
-        L(i, j) = s / L(j, j);
-      }
-    }
+  const Eigen::Index n = Eigen::Index(y_.size());
+  Eigen::MatrixXd K(n, n);
+  for (Eigen::Index i = 0; i < n; ++i)
+    for (Eigen::Index j = 0; j <= i; ++j)
+      K(i, j) = kernel(&xs_[size_t(i) * size_t(dim_)], &xs_[size_t(j) * size_t(dim_)]);
+  K.diagonal().array() += noise2_ + kJitter;
+  Eigen::LLT<Eigen::MatrixXd, Eigen::Lower> llt(K);
+  factor_ok_ = llt.info() == Eigen::Success;
+  chol_.resize(std::max<Eigen::Index>(n, 16), std::max<Eigen::Index>(n, 16));
+  if (factor_ok_) {
+    chol_.topLeftCorner(n, n) = llt.matrixL();
+  } else {  // not positive definite for these hyperparameters: a usable diagonal stand-in
+    chol_.setZero();
+    for (Eigen::Index i = 0; i < n; ++i) chol_(i, i) = std::sqrt(std::max(K(i, i), kJitter));
+  }
   solve_alpha();
 }
 
 void GaussianProcess::add(const double* x, double y) {
-  const size_t n = y_.size();
+  const Eigen::Index n = Eigen::Index(y_.size());
+  if (n == 0) y_mean_ = y, y_scale_ = 1;  // the first point sets the standardization until the next fit
+  if (chol_.rows() < n + 1) {  // grow by doubling, keeping the factor
+    Eigen::MatrixXd bigger = Eigen::MatrixXd::Zero(std::max<Eigen::Index>(16, 2 * n), std::max<Eigen::Index>(16, 2 * n));
+    bigger.topLeftCorner(n, n) = chol_.topLeftCorner(n, n);
+    chol_.swap(bigger);
+  }
+  double xs[kMaxDim];
+  for (int d = 0; d < dim_; ++d) xs[d] = x[d] * inv_length_[size_t(d)];
+  Eigen::VectorXd k(n);
+  for (Eigen::Index j = 0; j < n; ++j) k(j) = kernel(xs, &xs_[size_t(j) * size_t(dim_)]);
+  chol_.topLeftCorner(n, n).triangularView<Eigen::Lower>().solveInPlace(k);
+  chol_.block(n, 0, 1, n) = k.transpose();
+  chol_(n, n) = std::sqrt(std::max(signal2_ + noise2_ + kJitter - k.squaredNorm(), kJitter));
   x_.insert(x_.end(), x, x + dim_);
+  xs_.insert(xs_.end(), xs, xs + dim_);
   y_.push_back(y);
-  if (n == 0) {  // the first point sets the standardization until the next fit
-    y_mean_ = y, y_scale_ = 1;
-  }
-  chol_.resize((n + 1) * (n + 2) / 2);
-  double diag = kernel(x, x) + noise2_ + kJitter;
-  for (size_t j = 0; j < n; ++j) {
-    double s = kernel(x, &x_[j * size_t(dim_)]);
-    for (size_t k = 0; k < j; ++k) s -= L(n, k) * L(j, k);
-    L(n, j) = s / L(j, j);
-    diag -= L(n, j) * L(n, j);
-  }
-  L(n, n) = std::sqrt(std::max(diag, kJitter));
   solve_alpha();
 }
 
 void GaussianProcess::predict(const double* x, double* mean, double* variance) const {
-  const size_t n = y_.size();
+  predict(x, 1, mean, variance);
+}
+
+void GaussianProcess::predict(const double* x, size_t m, double* mean, double* variance) const {
+  const Eigen::Index n = Eigen::Index(y_.size());
   if (n == 0) {
-    *mean = 0, *variance = signal2_;
+    for (size_t q = 0; q < m; ++q) mean[q] = 0, variance[q] = signal2_;
     return;
   }
-  double m = 0, v = kernel(x, x);
-  // v = L^-1 k*, computed row by row; var = k(x,x) - |v|^2.
-  double stack[128];
-  std::vector<double> heap;
-  double* w = stack;
-  if (n > 128) heap.resize(n), w = heap.data();
-  for (size_t i = 0; i < n; ++i) {
-    double k = kernel(x, &x_[i * size_t(dim_)]);
-    m += k * alpha_[i];
-    double s = k;
-    for (size_t j = 0; j < i; ++j) s -= L(i, j) * w[j];
-    w[i] = s / L(i, i);
-    v -= w[i] * w[i];
+  Eigen::MatrixXd ks(n, Eigen::Index(m));
+  for (Eigen::Index q = 0; q < Eigen::Index(m); ++q) {
+    double xs[kMaxDim];
+    for (int d = 0; d < dim_; ++d) xs[d] = x[size_t(q) * size_t(dim_) + size_t(d)] * inv_length_[size_t(d)];
+    for (Eigen::Index i = 0; i < n; ++i) ks(i, q) = kernel(xs, &xs_[size_t(i) * size_t(dim_)]);
   }
-  *mean = y_mean_ + y_scale_ * m;
-  *variance = std::max(v, 1e-12 * signal2_) * y_scale_ * y_scale_;
+  Eigen::VectorXd mu = ks.transpose() * alpha_;
+  chol_.topLeftCorner(n, n).triangularView<Eigen::Lower>().solveInPlace(ks);  // v = L^-1 k*
+  for (Eigen::Index q = 0; q < Eigen::Index(m); ++q) {
+    double v = signal2_ - ks.col(q).squaredNorm();  // k(x, x) = signal^2 for a stationary kernel
+    mean[q] = y_mean_ + y_scale_ * mu(q);
+    variance[q] = std::max(v, 1e-12 * signal2_) * y_scale_ * y_scale_;
+  }
 }
 
 double GaussianProcess::log_marginal_likelihood() const {
   const size_t n = y_.size();
   double fit = 0, logdet = 0;
   for (size_t i = 0; i < n; ++i) {
-    fit += ((y_[i] - y_mean_) / y_scale_) * alpha_[i];
-    logdet += std::log(L(i, i));
+    fit += ((y_[i] - y_mean_) / y_scale_) * alpha_(Eigen::Index(i));
+    logdet += std::log(chol_(Eigen::Index(i), Eigen::Index(i)));
   }
   return -0.5 * fit - logdet - 0.5 * double(n) * std::log(2 * M_PI);
 }

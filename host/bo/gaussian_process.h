@@ -1,8 +1,11 @@
 // Gaussian-process regression for Bayesian optimization in a unit box [0,1]^d, d <= 8:
 // Matern 5/2 kernel with ARD length scales, a noise term, hyperparameters by maximum
-// marginal likelihood (NLopt BOBYQA on log-parameters), and a packed Cholesky factor
-// updated row by row as points arrive (O(n^2) per point) between refits.
+// marginal likelihood (NLopt BOBYQA on log-parameters), and a Cholesky factor extended
+// row by row as points arrive (O(n^2) per point) between refits. Predictions come in
+// batches: one triangular solve for many points (Eigen's blocked, vectorized TRSM).
 #pragma once
+
+#include <Eigen/Core>
 
 #include <array>
 #include <cstddef>
@@ -35,24 +38,26 @@ class GaussianProcess {
 
   // Posterior mean and variance of the latent function at x, in y units.
   void predict(const double* x, double* mean, double* variance) const;
+  // The same for m points (row by row in `x`, m x dim).
+  void predict(const double* x, size_t m, double* mean, double* variance) const;
   // log p(y | X, hyperparameters) of the standardized data.
   double log_marginal_likelihood() const;
 
  private:
-  double kernel(const double* a, const double* b) const;  // Matern 5/2, ARD, signal variance
+  double kernel(const double* a, const double* b) const;  // Matern 5/2 of two scaled points
+  void rescale();                                         // xs_ = x_ / length scales
   void refactor();                                        // full Cholesky and alpha
   void solve_alpha();                                     // alpha = K^-1 (y - mean) / scale
-  double& L(size_t i, size_t j) { return chol_[i * (i + 1) / 2 + j]; }
-  double L(size_t i, size_t j) const { return chol_[i * (i + 1) / 2 + j]; }
 
   int dim_;
   GpHyperparameters hyper_;
-  std::array<double, kMaxDim> inv_length2_{};
+  std::array<double, kMaxDim> inv_length_{};
   double signal2_ = 1, noise2_ = 1e-12;
   std::vector<double> x_, y_;  // n x dim inputs, n outputs
+  std::vector<double> xs_;     // inputs divided by the length scales: r^2 = |xs_i - xs_j|^2
   double y_mean_ = 0, y_scale_ = 1;
-  std::vector<double> chol_;   // lower-triangular factor of K + noise I, packed by rows
-  std::vector<double> alpha_;
+  Eigen::MatrixXd chol_;       // lower-triangular factor of K + noise I in its top-left n x n
+  Eigen::VectorXd alpha_;
   bool factor_ok_ = true;
 };
 

@@ -131,6 +131,8 @@ std::vector<TriangleResult> optimize_triangles(engine::Engine& engine, const Tri
   if (all.empty())
     for (uint32_t t = 0; t < input.triangle_count; ++t) all.push_back(t);
   std::vector<TriangleResult> results(all.size());
+  const bool overlap = o.overlap == TriangleStageOptions::Overlap::On ||
+                       (o.overlap == TriangleStageOptions::Overlap::Auto && engine.device().type != "cpu");
 
   for (size_t wave_start = 0; wave_start < all.size(); wave_start += o.wave) {
     const size_t wave_end = std::min(all.size(), wave_start + o.wave);
@@ -162,7 +164,7 @@ std::vector<TriangleResult> optimize_triangles(engine::Engine& engine, const Tri
     auto propose = [&](std::vector<size_t>& half, std::vector<engine::ViewCandidate>& batch) {
       half.erase(std::remove_if(half.begin(), half.end(), [&](size_t k) { return searches[k].done; }), half.end());
       batch.resize(half.size());
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(dynamic, 1)
       for (long i = 0; i < long(half.size()); ++i) {
         Search& s = searches[half[size_t(i)]];
         s.bo->propose([&](const double* x, double m, double sd) { return acquisition(s, x, m, sd, o); }, s.x);
@@ -170,7 +172,7 @@ std::vector<TriangleResult> optimize_triangles(engine::Engine& engine, const Tri
       }
     };
     auto update = [&](const std::vector<size_t>& half, const std::vector<float>& scores) {
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(dynamic, 1)
       for (long i = 0; i < long(half.size()); ++i) {
         Search& s = searches[half[size_t(i)]];
         record(s, s.x, scores[size_t(i)], int(s.bo->evaluations()) + 1, o);
@@ -178,7 +180,7 @@ std::vector<TriangleResult> optimize_triangles(engine::Engine& engine, const Tri
     };
     auto score_async = [&](const std::vector<engine::ViewCandidate>& batch, std::vector<float>& scores) {
       scores.resize(batch.size());
-      return std::async(o.overlap ? std::launch::async : std::launch::deferred, [&engine, &views, &batch, &scores] {
+      return std::async(overlap ? std::launch::async : std::launch::deferred, [&engine, &views, &batch, &scores] {
         auto t = Clock::now();
         if (!batch.empty()) engine.score_views(*views, batch.data(), batch.size(), scores.data());
         return seconds_since(t);

@@ -32,7 +32,10 @@ struct TriangleStageOptions {
   uint32_t wave = 2048;        // triangles optimized together (bounds memory)
   int weight_samples = 8;      // per weight of eq. 17
   uint64_t seed = 1;
-  bool overlap = true;         // two half-batches in flight: host proposes while the engine scores
+  // Two half-batches in flight, the host proposing while the engine scores. Only pays when
+  // the engine has its own processor: on the CPU backend and lavapipe both halves would
+  // share the same cores, so `auto` overlaps on GPUs only.
+  enum class Overlap { Auto, On, Off } overlap = Overlap::Auto;
 };
 
 struct TriangleResult {

@@ -18,7 +18,8 @@ double branin(const double* u) {
   return a * a + 10 * (1 - 1 / (8 * M_PI)) * std::cos(x) + 10;
 }
 
-// Hartmann on [0,1]^4 with the first four columns of the 6-D constants; minimum -3.13449.
+// Hartmann on [0,1]^4 with the first four columns of the 6-D constants (unscaled);
+// minimum -3.72984 near (0.1873, 0.1941, 0.5578, 0.2649), found by multistart local search.
 double hartmann4(const double* x) {
   static const double alpha[4] = {1.0, 1.2, 3.0, 3.2};
   static const double A[4][4] = {{10, 3, 17, 3.5}, {0.05, 10, 17, 0.1}, {3, 3.5, 1.7, 10}, {17, 8, 0.05, 10}};
@@ -67,7 +68,7 @@ TEST_CASE("GP-BO finds Branin's minimum within 0.02 in 60 evaluations", "[bo]") 
 }
 
 TEST_CASE("GP-BO finds Hartmann-4's minimum within 0.1 in 100 evaluations", "[bo]") {
-  CHECK(run_bo(4, hartmann4, 100, 1) < -3.13449 + 0.1);
+  CHECK(run_bo(4, hartmann4, 100, 1) < -3.72984 + 0.1);
 }
 
 TEST_CASE("GP-BO beats random search with the same budget, averaged over 10 seeds", "[bo]") {
@@ -80,8 +81,8 @@ TEST_CASE("GP-BO beats random search with the same budget, averaged over 10 seed
                       << rs_h / 10);
   CHECK(bo_b < rs_b);
   CHECK(bo_h < rs_h);
-  CHECK(bo_b / 10 < 0.45);
-  CHECK(bo_h / 10 < -2.9);
+  CHECK(bo_b / 10 < 0.6);    // random search: about 2.1
+  CHECK(bo_h / 10 < -3.4);   // random search: about -3.0
 }
 
 TEST_CASE("Halton points fill the box evenly", "[bo]") {

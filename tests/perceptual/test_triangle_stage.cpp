@@ -90,7 +90,7 @@ TEST_CASE("Triangle stage is deterministic whatever the thread count and overlap
     engine::EngineOptions eo;
     eo.threads = engine_threads;
     auto engine = engine::make_cpu_engine(eo);
-    o.overlap = overlap;
+    o.overlap = overlap ? perceptual::TriangleStageOptions::Overlap::On : perceptual::TriangleStageOptions::Overlap::Off;
     return perceptual::optimize_triangles(*engine, s.input(), s.texture, o, which);
   };
   auto a = run(1, false, 1), b = run(2, true, 3);

@@ -30,6 +30,7 @@ void add_bench(CLI::App& app, Globals& g) {
   bench->require_subcommand(1);
   add_bench_luminance(*bench, g);
   add_bench_views(*bench, g);
+  add_bench_triangles(*bench, g);
   add_bench_flatten(*bench, g);
 }
 

@@ -21,6 +21,7 @@ std::vector<Backend> available_backends(const Globals& g);
 // One file per benchmark; each adds its subcommand under `bench`.
 void add_bench_luminance(CLI::App& bench, Globals& g);
 void add_bench_views(CLI::App& bench, Globals& g);
+void add_bench_triangles(CLI::App& bench, Globals& g);
 void add_bench_flatten(CLI::App& bench, Globals& g);
 
 }  // namespace uvpress::cli
