@@ -11,10 +11,20 @@
 
 // Downsampled images in zero-padded tiles (a one-pixel border of zeros), so the Prewitt
 // stencil reads without bounds checks or branches; the GMS map.
+// An including shader may lend its own shared pool (GMSD_POOL: an array of at least
+// GMSD_POOL_FLOATS floats) so the kernel's phases share one block of shared memory.
 #define GMSD_PAD (34u * 34u)
-shared float s_d1[GMSD_PAD];
-shared float s_d2[GMSD_PAD];
-shared float s_gms[1024];
+#define GMSD_POOL_FLOATS (2u * GMSD_PAD + 1024u)
+#ifdef GMSD_POOL
+#define s_d1(i) GMSD_POOL[(i)]
+#define s_d2(i) GMSD_POOL[GMSD_PAD + (i)]
+#define s_gms(i) GMSD_POOL[2u * GMSD_PAD + (i)]
+#else
+shared float s_gmsd_pool[GMSD_POOL_FLOATS];
+#define s_d1(i) s_gmsd_pool[(i)]
+#define s_d2(i) s_gmsd_pool[GMSD_PAD + (i)]
+#define s_gms(i) s_gmsd_pool[2u * GMSD_PAD + (i)]
+#endif
 
 // Workgroup reductions: every invocation writes its partial, the first WG/8 invocations
 // each add 8 consecutive partials in order, then every invocation adds those WG/8 sums in
@@ -65,13 +75,13 @@ float gmsd_magnitude(uint which, uint c, uint W2) {
   // c: the centre's index in the padded tile of row length W2.
   float a00, a10, a20, a01, a21, a02, a12, a22;
   if (which == 0u) {
-    a00 = s_d1[c - W2 - 1u]; a10 = s_d1[c - W2]; a20 = s_d1[c - W2 + 1u];
-    a01 = s_d1[c - 1u];                          a21 = s_d1[c + 1u];
-    a02 = s_d1[c + W2 - 1u]; a12 = s_d1[c + W2]; a22 = s_d1[c + W2 + 1u];
+    a00 = s_d1(c - W2 - 1u); a10 = s_d1(c - W2); a20 = s_d1(c - W2 + 1u);
+    a01 = s_d1(c - 1u);                          a21 = s_d1(c + 1u);
+    a02 = s_d1(c + W2 - 1u); a12 = s_d1(c + W2); a22 = s_d1(c + W2 + 1u);
   } else {
-    a00 = s_d2[c - W2 - 1u]; a10 = s_d2[c - W2]; a20 = s_d2[c - W2 + 1u];
-    a01 = s_d2[c - 1u];                          a21 = s_d2[c + 1u];
-    a02 = s_d2[c + W2 - 1u]; a12 = s_d2[c + W2]; a22 = s_d2[c + W2 + 1u];
+    a00 = s_d2(c - W2 - 1u); a10 = s_d2(c - W2); a20 = s_d2(c - W2 + 1u);
+    a01 = s_d2(c - 1u);                          a21 = s_d2(c + 1u);
+    a02 = s_d2(c + W2 - 1u); a12 = s_d2(c + W2); a22 = s_d2(c + W2 + 1u);
   }
   // Padding zeros stand for the CPU's out-of-range zeros: the same sums, term for term.
   precise float gx = (a20 + a21) + a22;
@@ -104,8 +114,8 @@ float gmsd_run(uint width, uint height) {
       d1 = 0.25 * s1;
       d2 = 0.25 * s2;
     }
-    s_d1[k] = d1;
-    s_d2[k] = d2;
+    s_d1(k) = d1;
+    s_d2(k) = d2;
   }
   barrier();
   const float T = 170.0 / (255.0 * 255.0);
@@ -119,13 +129,13 @@ float gmsd_run(uint width, uint height) {
     den += g2 * g2;
     den += T;
     float v = num / den;
-    s_gms[k] = v;
+    s_gms(k) = v;
     part += v;
   }
   float mean = workgroup_sum(part) / float(n);
   precise float var = 0.0;
   for (uint k = tid; k < n; k += WG) {
-    float d = s_gms[k] - mean;
+    float d = s_gms(k) - mean;
     var += d * d;
   }
   float total = workgroup_sum(var);

@@ -21,9 +21,8 @@ layout(push_constant) uniform Push { ViewPush p; };
 // Scratch slot layout, in 32-bit words.
 const uint kPix = kViewMaxSize * kViewMaxSize, kTexels = kTileMax * kTileMax;
 const uint OFF_U = 0u, OFF_V = kPix, OFF_CAND = 2u * kPix, OFF_K = 3u * kPix;
-const uint OFF_R = OFF_K + 9u * kTexels, OFF_X = OFF_R + kTexels, OFF_Z = OFF_X + kTexels;
-const uint OFF_P = OFF_Z + kTexels, OFF_AP = OFF_P + kTexels, OFF_DIAG = OFF_AP + kTexels;
-const uint kSlot = OFF_DIAG + kTexels;
+const uint OFF_R = OFF_K + 9u * kTexels, OFF_X = OFF_R + kTexels;
+const uint kSlot = OFF_X + kTexels;
 const float kFixedPoint = 65536.0, kSmoothness = 1e-5, kTolerance = 1e-5;
 const uint kMaxIterations = 200u;
 
@@ -42,6 +41,13 @@ float gmsd_b(int x, int y) {
   return (x < S && y < S) ? sf(OFF_CAND + uint(y * S + x)) : 0.0;
 }
 
+// One block of shared memory for the phases: the CG vectors, then GMSD's tiles.
+// CG: p in a zero-padded (w + 2) x (h + 2) tile (the stencil reads it without bounds
+// checks), r, Ap (then z) and the diagonal, each n <= kTexels.
+const uint SP_P = 0u, SP_R = 34u * 34u, SP_AP = SP_R + kTexels, SP_DIAG = SP_AP + kTexels;
+const uint kPoolFloats = SP_DIAG + kTexels;  // >= GMSD_POOL_FLOATS
+shared float s_pool[kPoolFloats];
+#define GMSD_POOL s_pool
 #include "gmsd.glsl"
 
 shared vec3 s_s[kViewMaxTriangles];
@@ -53,16 +59,26 @@ uint cover_at(uint pix) { return (coverage[g_cov_base + pix / 4u] >> (8u * (pix 
 
 uint stencil_slot(int di, int dj) { return uint((di + 1) + 3 * (dj + 1)); }
 
-// (A p) for texel t of a w x h tile, A the 9-point stencil in OFF_K (as floats by then).
-float apply_row(uint t, int w, int h, uint src) {
-  int ii = int(t) % w, jj = int(t) / w;
-  precise float acc = 0.0;
-  for (int dj = -1; dj <= 1; ++dj)
-    for (int di = -1; di <= 1; ++di) {
-      int i2 = ii + di, j2 = jj + dj;
-      if (i2 < 0 || j2 < 0 || i2 >= w || j2 >= h) continue;
-      acc += sf(OFF_K + t * 9u + stencil_slot(di, dj)) * sf(src + uint(j2 * w + i2));
-    }
+// Row of texel t = j w + i of a w x h tile, exactly, without an integer division:
+// t / w is at least 1 / (2 w) >= 1 / 64 away from an integer once 0.5 is added.
+uint tile_row(uint t, float inv_w) { return uint((float(t) + 0.5) * inv_w); }
+
+// (A p) for texel t whose padded index is c (row pitch W2), A the 9-point stencil in OFF_K
+// (as floats by then). Out-of-tile neighbours read the padding's zeros where the CPU skips
+// the term: A is 0 there too, and adding +0 changes nothing.
+float apply_row(uint t, uint c, uint W2) {
+  uint a = g_slot + OFF_K + t * 9u, q = c - W2 - 1u;
+  precise float acc = uintBitsToFloat(scratch[a]) * s_pool[SP_P + q];
+  acc += uintBitsToFloat(scratch[a + 1u]) * s_pool[SP_P + q + 1u];
+  acc += uintBitsToFloat(scratch[a + 2u]) * s_pool[SP_P + q + 2u];
+  q += W2;
+  acc += uintBitsToFloat(scratch[a + 3u]) * s_pool[SP_P + q];
+  acc += uintBitsToFloat(scratch[a + 4u]) * s_pool[SP_P + q + 1u];
+  acc += uintBitsToFloat(scratch[a + 5u]) * s_pool[SP_P + q + 2u];
+  q += W2;
+  acc += uintBitsToFloat(scratch[a + 6u]) * s_pool[SP_P + q];
+  acc += uintBitsToFloat(scratch[a + 7u]) * s_pool[SP_P + q + 1u];
+  acc += uintBitsToFloat(scratch[a + 8u]) * s_pool[SP_P + q + 2u];
   return acc;
 }
 
@@ -166,26 +182,28 @@ void main() {
     if (ti + 1 < w) { set_sf(OFF_K + t * 9u + 4u, sf(OFF_K + t * 9u + 4u) + mu); set_sf(OFF_K + t * 9u + 5u, sf(OFF_K + t * 9u + 5u) - mu); }
     if (tj > 0) { set_sf(OFF_K + t * 9u + 4u, sf(OFF_K + t * 9u + 4u) + mu); set_sf(OFF_K + t * 9u + 1u, sf(OFF_K + t * 9u + 1u) - mu); }
     if (tj + 1 < h) { set_sf(OFF_K + t * 9u + 4u, sf(OFF_K + t * 9u + 4u) + mu); set_sf(OFF_K + t * 9u + 7u, sf(OFF_K + t * 9u + 7u) - mu); }
-    set_sf(OFF_DIAG + t, sf(OFF_K + t * 9u + 4u));
+    s_pool[SP_DIAG + t] = sf(OFF_K + t * 9u + 4u);
     precise float bt = float(int(scratch[g_slot + OFF_R + t])) * inv_q;
     bt -= mean * (float(rowsum) * inv_q);
-    set_sf(OFF_R + t, bt);
+    s_pool[SP_R + t] = bt;
     set_sf(OFF_X + t, 0.0);
   }
+  uint W2 = uint(w) + 2u;
+  for (uint q = tid; q < W2 * uint(h + 2); q += WG) s_pool[SP_P + q] = 0.0;
   memoryBarrierBuffer();
   barrier();
 
   // 5. Jacobi-preconditioned CG from x = 0: the CPU backend's iteration, with the vector
   // updates fused into the loops that feed the next dot products (two reductions and one
-  // barrier per iteration; z = r / diag is formed where it is used).
+  // barrier per iteration). Vectors in shared memory, x in the scratch slot.
+  float inv_w = 1.0 / float(w);
   precise float part = 0.0, part2 = 0.0;
   for (uint t = tid; t < n; t += WG) {
-    float r = sf(OFF_R + t), z = r / sf(OFF_DIAG + t);
-    set_sf(OFF_P + t, z);
+    float r = s_pool[SP_R + t], z = r / s_pool[SP_DIAG + t];
+    s_pool[SP_P + t + 2u * tile_row(t, inv_w) + W2 + 1u] = z;
     part += r * r;
     part2 += r * z;
   }
-  memoryBarrierBuffer();
   vec4 sums = wg_sum4(vec4(part, part2, 0.0, 0.0));
   float bb = sums.x, rz = sums.y;
   if (bb > 0.0) {
@@ -193,26 +211,32 @@ void main() {
     for (uint it = 0u; it < kMaxIterations; ++it) {
       part = 0.0;
       for (uint t = tid; t < n; t += WG) {
-        float ap = apply_row(t, w, h, OFF_P);
-        set_sf(OFF_AP + t, ap);
-        part += sf(OFF_P + t) * ap;
+        uint c = t + 2u * tile_row(t, inv_w) + W2 + 1u;
+        float ap = apply_row(t, c, W2);
+        s_pool[SP_AP + t] = ap;
+        part += s_pool[SP_P + c] * ap;
       }
       float alpha = rz / workgroup_sum(part);
       part = 0.0;
       part2 = 0.0;
       for (uint t = tid; t < n; t += WG) {
-        set_sf(OFF_X + t, sf(OFF_X + t) + alpha * sf(OFF_P + t));
-        float r = sf(OFF_R + t) - alpha * sf(OFF_AP + t);
-        set_sf(OFF_R + t, r);
+        float pt = s_pool[SP_P + t + 2u * tile_row(t, inv_w) + W2 + 1u];
+        set_sf(OFF_X + t, sf(OFF_X + t) + alpha * pt);
+        float r = s_pool[SP_R + t] - alpha * s_pool[SP_AP + t];
+        s_pool[SP_R + t] = r;
+        float z = r / s_pool[SP_DIAG + t];
+        s_pool[SP_AP + t] = z;  // Ap is spent: keep z for the p update
         part += r * r;
-        part2 += r * (r / sf(OFF_DIAG + t));
+        part2 += r * z;
       }
       sums = wg_sum4(vec4(part, part2, 0.0, 0.0));
       if (sums.x <= stop) break;
       float beta = sums.y / rz;
       rz = sums.y;
-      for (uint t = tid; t < n; t += WG) set_sf(OFF_P + t, sf(OFF_R + t) / sf(OFF_DIAG + t) + beta * sf(OFF_P + t));
-      memoryBarrierBuffer();
+      for (uint t = tid; t < n; t += WG) {
+        uint c = t + 2u * tile_row(t, inv_w) + W2 + 1u;
+        s_pool[SP_P + c] = s_pool[SP_AP + t] + beta * s_pool[SP_P + c];
+      }
       barrier();
     }
   }

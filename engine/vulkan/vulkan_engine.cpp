@@ -26,7 +26,7 @@ using shader::ViewPush;
 
 // Words of view_score.comp's scratch slot per candidate (its OFF_* layout).
 constexpr uint64_t kScoreSlotBytes =
-    4ull * (3 * shader::kViewMaxSize * shader::kViewMaxSize + 15 * shader::kTileMax * shader::kTileMax);
+    4ull * (3 * shader::kViewMaxSize * shader::kViewMaxSize + 11 * shader::kTileMax * shader::kTileMax);
 constexpr uint32_t kScoreChunk = 1024;  // candidates per submit, at most
 constexpr uint32_t kWorkgroup = 256;
 
