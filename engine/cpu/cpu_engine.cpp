@@ -6,6 +6,7 @@
 #include "views.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <string>
 #include <thread>
@@ -13,20 +14,24 @@
 namespace uvpress::engine {
 namespace {
 
-// Runs fn(i) for i in [0, n) on up to `threads` threads, contiguous blocks per thread.
-// Results depend only on i, never on the split, so output is identical for any thread count.
+// Runs fn(i) for i in [0, n) on up to `threads` threads, handing out blocks of 8 from an
+// atomic counter (view costs vary a lot: balancing matters). Results depend only on i,
+// never on which thread ran it, so output is identical for any thread count.
 template <class Fn>
 void parallel_for(uint32_t n, unsigned threads, Fn fn) {
-  unsigned t = std::max(1u, std::min<unsigned>(threads, n));
+  unsigned t = std::max(1u, std::min<unsigned>(threads, (n + 7) / 8));
   if (t == 1) {
     for (uint32_t i = 0; i < n; ++i) fn(i);
     return;
   }
+  std::atomic<uint32_t> next{0};
+  auto work = [&] {
+    for (uint32_t first; (first = next.fetch_add(8)) < n;)
+      for (uint32_t i = first; i < std::min(n, first + 8); ++i) fn(i);
+  };
   std::vector<std::thread> pool;
-  for (unsigned k = 0; k < t; ++k)
-    pool.emplace_back([=] {
-      for (uint32_t i = uint32_t(uint64_t(n) * k / t); i < uint32_t(uint64_t(n) * (k + 1) / t); ++i) fn(i);
-    });
+  for (unsigned k = 1; k < t; ++k) pool.emplace_back(work);
+  work();
   for (auto& th : pool) th.join();
 }
 

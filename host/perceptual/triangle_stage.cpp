@@ -206,6 +206,11 @@ std::vector<TriangleResult> optimize_triangles(engine::Engine& engine, const Tri
       }
       // Half 1's scores are applied in the next pass (as `other` of h = 0).
       ++local.rounds;
+      if (o.progress) {
+        size_t done = wave_start;
+        for (const Search& s : searches) done += s.done;
+        o.progress(done, all.size());
+      }
       if (halves[0].empty() && halves[1].empty()) break;
     }
 

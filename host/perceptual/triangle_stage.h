@@ -18,6 +18,7 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 namespace uvpress::perceptual {
@@ -36,6 +37,8 @@ struct TriangleStageOptions {
   // the engine has its own processor: on the CPU backend and lavapipe both halves would
   // share the same cores, so `auto` overlaps on GPUs only.
   enum class Overlap { Auto, On, Off } overlap = Overlap::Auto;
+  // Called after every round with (triangles finished, triangles in all).
+  std::function<void(size_t, size_t)> progress;
 };
 
 struct TriangleResult {

@@ -70,11 +70,13 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"auto", "gpu", "lavapipe", "cpu"}));
   app.add_option("--report", g.report, "Write a JSON report of the run to this file");
   app.add_flag("--vulkan-validation", g.validation, "Enable the Khronos validation layer (or UVPRESS_VALIDATION=1)");
+  cli::add_reparam(app, g);
   cli::add_info(app, g);
   cli::add_copy(app, g);
   cli::add_demo(app, g);
   cli::add_bench(app, g);
   cli::add_flatten(app, g);
+  cli::add_eval(app, g);
 
   try {
     app.parse(argc, argv);

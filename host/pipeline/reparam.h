@@ -1,0 +1,38 @@
+// `uvpress reparam`: the whole perceptual-loss re-parameterization of an asset (seed
+// paper 001): per UV layout shared by a set of textures, the triangle stage (GP-BO of each
+// triangle's Jacobian on the engine), the mesh stage per chart, packing into the budget,
+// re-baking every texture that samples the layout, and the new UVs and images written into
+// the glTF. Everything else in the file is kept as it is.
+#pragma once
+
+#include "engine.h"
+#include "io/gltf_io.h"
+#include "perceptual/triangle_stage.h"
+
+#include <nlohmann/json.hpp>
+
+#include <functional>
+#include <string>
+
+namespace uvpress::pipeline {
+
+struct ReparamOptions {
+  double cost = 0.5;       // relative pixel cost c_r of the new textures vs the old (eq. 20-21)
+  uint32_t size = 0;       // instead of cost: the new size of the largest side of the driving texture
+  bool power_of_two = false;
+  uint32_t gutter = 4;     // texels between charts and at the image edge
+  uint32_t block = 1;      // chart alignment (4 for BCn)
+  bool optimize = true;    // false: keep every Jacobian (identity), only repack and re-bake
+  perceptual::TriangleStageOptions triangle;
+};
+
+// Progress: stage name, done, total (for a stderr bar on long runs).
+using Progress = std::function<void(const std::string& stage, size_t done, size_t total)>;
+
+// Re-parameterizes `file` in place (model and image_bytes). Returns the report: device,
+// layouts, textures (old/new size and bytes), cost_ratio, flips, charts, packing
+// efficiency, per-stage seconds, warnings (e.g. tiled layouts left untouched).
+nlohmann::ordered_json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& options,
+                               const Progress& progress = {});
+
+}  // namespace uvpress::pipeline

@@ -1,0 +1,110 @@
+// uvpress reparam <in> -o <out>: new UVs under which a smaller texture looks as good on
+// screen (perceptual loss, GMSD), every texture re-baked into them, a valid glTF written.
+#include "cli.h"
+
+#include "core/error.h"
+#include "io/gltf_io.h"
+#include "pipeline/reparam.h"
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <unistd.h>
+
+namespace uvpress::cli {
+
+namespace {
+
+// A one-line progress display on stderr when it is a terminal; quiet otherwise.
+class ProgressLine {
+ public:
+  explicit ProgressLine(bool verbose) : tty_(isatty(2)), verbose_(verbose) {}
+  ~ProgressLine() { finish(); }
+  void operator()(const std::string& stage, size_t done, size_t total) {
+    auto now = std::chrono::steady_clock::now();
+    if (stage != stage_) {
+      finish();
+      stage_ = stage;
+    } else if (now - last_ < std::chrono::milliseconds(200) && done < total) {
+      return;
+    }
+    last_ = now;
+    if (tty_) std::fprintf(stderr, "\r%s: %zu/%zu (%.0f%%)   ", stage.c_str(), done, total, total ? 100.0 * done / total : 100.0);
+    shown_ = tty_;
+  }
+  void finish() {
+    if (shown_) std::fputc('\n', stderr);
+    if (!shown_ && verbose_ && !stage_.empty()) std::fprintf(stderr, "%s: done\n", stage_.c_str());
+    shown_ = false;
+    stage_.clear();
+  }
+
+ private:
+  bool tty_, verbose_, shown_ = false;
+  std::string stage_;
+  std::chrono::steady_clock::time_point last_{};
+};
+
+uint64_t texels(const nlohmann::ordered_json& textures, const char* key) {
+  uint64_t n = 0;
+  for (const auto& t : textures) n += t[key][0].get<uint64_t>() * t[key][1].get<uint64_t>();
+  return n;
+}
+
+}  // namespace
+
+void add_reparam(CLI::App& app, Globals& g) {
+  auto* cmd = app.add_subcommand("reparam", "Re-parameterize an asset so that smaller textures look as good (GMSD)");
+  auto input = std::make_shared<std::string>(), output = std::make_shared<std::string>();
+  auto o = std::make_shared<pipeline::ReparamOptions>();
+  auto no_optimize = std::make_shared<bool>(false);
+  cmd->add_option("input", *input, "glTF asset (.gltf or .glb)")->required();
+  cmd->add_option("-o,--output", *output, "Output file (.gltf or .glb)")->required();
+  auto* cost = cmd->add_option("--cost", o->cost, "Texels of the new textures relative to the old (0.5: half)")
+                   ->capture_default_str()
+                   ->check(CLI::Range(0.001, 1.0));
+  cmd->add_option("--size", o->size, "New size of the driving texture's longer side, instead of --cost")
+      ->check(CLI::Range(8u, 16384u))
+      ->excludes(cost);
+  cmd->add_flag("--pot", o->power_of_two, "Power-of-two texture sizes");
+  cmd->add_option("--gutter", o->gutter, "Texels between charts and at the edge")->capture_default_str()->check(CLI::Range(0u, 64u));
+  cmd->add_option("--block-align", o->block, "Align charts to N x N blocks (4 for BCn)")->check(CLI::IsMember({1u, 4u}));
+  cmd->add_option("--epsilon", o->triangle.epsilon, "GMSD bound per triangle view (eq. 12)")->capture_default_str()->check(CLI::Range(1e-4, 0.5));
+  cmd->add_option("--evaluations", o->triangle.evaluations, "GP-BO evaluations per triangle")->capture_default_str()->check(CLI::Range(11, 1000));
+  cmd->add_option("--view-size", o->triangle.view_size, "Per-triangle view size in pixels")->capture_default_str()->check(CLI::IsMember({16u, 32u, 48u, 64u}));
+  cmd->add_option("--seed", o->triangle.seed, "Seed of the Bayesian optimization")->capture_default_str();
+  cmd->add_flag("--no-optimize", *no_optimize, "Keep every triangle's shape: only repack and re-bake");
+  cmd->callback([&g, input, output, o, no_optimize] {
+    g.action = [&g, input, output, o, no_optimize] {
+      auto t0 = std::chrono::steady_clock::now();
+      if (!io::is_gltf_output_path(*output)) throw InputError(*output, "unsupported output format (use .gltf or .glb)");
+      io::GltfFile file = io::load_gltf(*input);
+      auto engine = g.make_engine();
+      pipeline::ReparamOptions options = *o;
+      options.optimize = !*no_optimize;
+      ProgressLine progress(g.verbose);
+      auto report = pipeline::reparam(file, *engine, options, std::ref(progress));
+      progress.finish();
+      io::save_gltf(file, *output);
+      double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      uint64_t in_bytes = std::filesystem::file_size(*input), out_bytes = std::filesystem::file_size(*output);
+      for (const auto& w : report["warnings"]) std::fprintf(stderr, "uvpress: %s: warning: %s\n", input->c_str(), w.get<std::string>().c_str());
+      const uint64_t old_t = texels(report["textures"], "old_size"), new_t = texels(report["textures"], "new_size");
+      std::printf("%s (%s, %llu texels) -> %s (%s, %llu texels), cost ratio %.3f, %.1f s\n", input->c_str(),
+                  human_bytes(in_bytes).c_str(), (unsigned long long)old_t, output->c_str(), human_bytes(out_bytes).c_str(),
+                  (unsigned long long)new_t, report["cost_ratio"].get<double>(), seconds);
+      if (g.verbose)
+        for (auto& [stage, s] : report["stages"].items()) std::fprintf(stderr, "%s: %.2f s\n", stage.c_str(), s.get<double>());
+      nlohmann::ordered_json out = {{"input", *input}, {"output", *output}, {"device", report["device"]},
+                                    {"backend", report["backend"]}, {"seconds", seconds}, {"input_bytes", in_bytes},
+                                    {"output_bytes", out_bytes}};
+      for (auto& [key, value] : report.items())
+        if (!out.contains(key)) out[key] = value;
+      out["seconds"] = seconds;
+      g.write_report(out);
+      return 0;
+    };
+  });
+}
+
+}  // namespace uvpress::cli
