@@ -4,6 +4,7 @@
 
 #include "layout.h"
 
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -96,6 +97,44 @@ struct ImagePairs {
   const float* second = nullptr;
 };
 
+// ---- Whole-mesh renders (eval, seed 001 section 5.1) ----
+//
+// A batch of perspective views of one textured triangle mesh. Triangle set-up (projection
+// in double, snapping to 1/16 pixel, attribute planes) is shared host code, so both
+// backends rasterize the same integers: coverage is identical by construction of the
+// kernel, pixel values agree to fp32 rounding. Rules: pixel (i, j) has its centre at
+// (i + 0.5, j + 0.5), x right, y down; integer edge functions with 4 sub-pixel bits and a
+// top-left rule; both faces drawn (no culling); depth = 1/w, larger is nearer, ties keep
+// the lower triangle index; perspective-correct UVs; the texture is sampled bilinearly by
+// hand in fp32 (no mip-maps: see host/eval/eval.h for why that is the right filter here),
+// clamp-to-edge or repeat; empty pixels are 0 in every channel.
+struct MeshRenderDesc {
+  uint32_t width = 512, height = 512;  // pixels, 8..1024 each
+  // One camera per view: clip = M (x, y, z, 1), row-major 4x4 (OpenGL conventions: NDC x
+  // right, y up; w > 0 in front of the camera).
+  std::vector<std::array<float, 16>> cameras;
+  const float* positions = nullptr;  // x y z per vertex
+  size_t vertex_count = 0;
+  const uint32_t* indices = nullptr;  // 3 per triangle
+  size_t triangle_count = 0;
+  const float* uvs = nullptr;  // u v per vertex, glTF convention (v down the image)
+  const float* texture = nullptr;  // texture_height rows of texture_width texels, `channels` floats each, row 0 on top
+  uint32_t texture_width = 0, texture_height = 0, channels = 1;  // channels 1..4
+  bool repeat = false;  // REPEAT wrapping on both axes, else clamp-to-edge
+};
+
+// Renders, view after view: coverage (triangle index, kNoMeshTriangle where empty) and
+// `channels` floats a pixel.
+struct MeshRenders {
+  uint32_t width = 0, height = 0, count = 0, channels = 0;
+  std::vector<uint32_t> coverage;
+  std::vector<float> pixels;
+};
+constexpr uint32_t kNoMeshTriangle = 0xffffffffu;
+
+// Throws EngineError for a description that breaks the limits above.
+void check_mesh_render(const MeshRenderDesc& desc);
+
 class Engine {
  public:
   virtual ~Engine() = default;
@@ -114,6 +153,10 @@ class Engine {
   // `images`, also returns coverage, reference and candidate renders per candidate.
   virtual void score_views(ViewSet& views, const ViewCandidate* candidates, size_t count, float* gmsd,
                            ViewImages* images = nullptr) = 0;
+
+  // Whole-mesh renders (see MeshRenderDesc). The default is the CPU reference
+  // (engine/cpu/render_mesh.cpp); the Vulkan backend runs render_mesh.comp.
+  virtual MeshRenders render_mesh(const MeshRenderDesc& desc);
 
   // Validation-layer errors seen so far (always 0 on the CPU backend).
   virtual uint64_t validation_errors() const { return 0; }

@@ -70,6 +70,33 @@ struct GmsdPush {
   uint count;
 };
 
+// ---- Whole-mesh renders (eval: engine::MeshRenderDesc, render_mesh.comp) ----
+//
+// One set-up triangle of one view, made on the host (engine/mesh_setup.cpp) for both
+// backends: vertices snapped to 1/16 pixel and positively oriented, and three affine planes
+// over the screen relative to vertex 0, value(x, y) = c0 + c1 (x - x0/16) + c2 (y - y0/16),
+// for 1/w (larger is nearer) and for s/w, t/w (s, t texel coordinates, s = u W - 0.5).
+struct MeshTriangle {
+  int x0, y0, x1, y1, x2, y2;
+  float inv_w[3];
+  float s_w[3];
+  float t_w[3];
+  uint index;  // triangle index in the mesh: coverage value and depth tie-break
+};
+
+// Views are binned in kMeshTile x kMeshTile pixel tiles; each tile lists the set-up
+// triangles whose pixel box meets it, in increasing triangle index.
+struct MeshPush {
+  uint width;   // pixels
+  uint height;
+  uint tiles_x;
+  uint tiles_y;
+  uint texture_width;
+  uint texture_height;
+  uint channels;  // 1..4 floats a texel and a pixel
+  uint repeat;    // 1: REPEAT wrapping, 0: clamp-to-edge
+};
+
 #ifdef __cplusplus
 constexpr uint kViewMaxSize = 64;         // S <= 64: GMSD works on a 32 x 32 shared tile
 constexpr uint kViewMaxTriangles = 64;    // 1 + one-ring
@@ -81,6 +108,9 @@ static_assert(sizeof(ViewDesc) == 16, "std430 layout");
 static_assert(sizeof(ViewCandidate) == 32, "std430 layout");
 static_assert(sizeof(ViewPush) == 32, "push constant layout");
 static_assert(sizeof(ImageBatchPush) == 16, "push constant layout");
+constexpr uint kMeshTile = 16;            // render_mesh.comp: one 16 x 16 workgroup a tile
+static_assert(sizeof(MeshTriangle) == 64, "std430 layout");
+static_assert(sizeof(MeshPush) == 32, "push constant layout");
 }  // namespace uvpress::shader
 #else
 #define kViewMaxSize 64u
@@ -88,6 +118,7 @@ static_assert(sizeof(ImageBatchPush) == 16, "push constant layout");
 #define kViewGuardBand 511u
 #define kTileMax 32u
 #define kNoTriangle 255u
+#define kMeshTile 16u
 #endif
 
 #endif

@@ -9,6 +9,8 @@
 #include "luminance.spv.h"
 #include "view_prepare.spv.h"
 #include "view_score.spv.h"
+#include "render_mesh.spv.h"
+#include "mesh_render.h"
 
 #include <algorithm>
 #include <cstdlib>
@@ -62,6 +64,88 @@ struct VulkanViewSet final : ViewSet {
 constexpr uint32_t kLocal = 16;  // 16x16 invocations: 256 threads, fine on GPUs and lavapipe
 
 uint32_t groups(uint32_t n, uint32_t local) { return (n + local - 1) / local; }
+
+// ---- Whole-mesh renders (render_mesh.comp) ----
+// Its own kernel and buffers, made on first use (eval is the only user). Views go in
+// chunks whose set-up triangles, bins and outputs each fit one device buffer.
+class MeshRenderer {
+ public:
+  MeshRenderer(vk::Context& context, vk::Sequence& sequence, uint64_t max_buffer)
+      : context_(context), sequence_(sequence), max_buffer_(max_buffer),
+        kernel_(context, render_mesh_spv, sizeof(render_mesh_spv), 6, sizeof(shader::MeshPush), shader::kMeshTile,
+                shader::kMeshTile) {}
+
+  MeshRenders render(const MeshRenderDesc& d) {
+    check_mesh_render(d);
+    MeshRenders out;
+    out.width = d.width, out.height = d.height, out.count = uint32_t(d.cameras.size()), out.channels = d.channels;
+    const uint64_t n = uint64_t(d.width) * d.height;
+    out.coverage.resize(n * out.count);
+    out.pixels.resize(n * out.count * d.channels);
+    if (out.count == 0) return out;
+    const uint64_t tex_bytes = 4ull * d.texture_width * d.texture_height * d.channels;
+    if (tex_bytes > max_buffer_)
+      throw EngineError("Vulkan render_mesh: the texture exceeds the device's largest buffer");
+    vk::Buffer& texture = buffer(texture_, tex_bytes);
+    std::memcpy(texture.data<float>(), d.texture, tex_bytes);
+    const uint32_t tx = mesh::tiles_x(d), ty = mesh::tiles_y(d);
+    const uint64_t bins = uint64_t(tx) * ty;
+    std::vector<mesh::ViewSetup> setups(out.count);
+    for (uint32_t v = 0; v < out.count; ++v) setups[v] = mesh::setup_view(d, v);
+    for (uint32_t first = 0; first < out.count;) {
+      // The longest run of views whose arrays fit.
+      uint64_t tri = 0, items = 0;
+      uint32_t count = 0;
+      while (first + count < out.count) {
+        const auto& s = setups[first + count];
+        const uint64_t t2 = tri + s.triangles.size() * sizeof(shader::MeshTriangle), i2 = items + 4 * s.bin_items.size();
+        const uint64_t pix = 4 * n * d.channels * (count + 1), offs = 4 * (bins * (count + 1) + 1);
+        if (count > 0 && (t2 > max_buffer_ || i2 > max_buffer_ || pix > max_buffer_ || offs > max_buffer_)) break;
+        if (count == 0 && (t2 > max_buffer_ || i2 > max_buffer_ || pix > max_buffer_))
+          throw EngineError("Vulkan render_mesh: one view exceeds the device's largest buffer");
+        tri = t2, items = i2, ++count;
+      }
+      vk::Buffer& triangles = buffer(triangles_, std::max<uint64_t>(tri, 4));
+      vk::Buffer& offsets = buffer(offsets_, 4 * (bins * count + 1));
+      vk::Buffer& bin_items = buffer(items_, std::max<uint64_t>(items, 4));
+      vk::Buffer& coverage = buffer(coverage_, 4 * n * count);
+      vk::Buffer& pixels = buffer(pixels_, 4 * n * d.channels * count);
+      uint32_t t_base = 0, i_base = 0;
+      for (uint32_t v = 0; v < count; ++v) {
+        const auto& s = setups[first + v];
+        std::memcpy(triangles.data<shader::MeshTriangle>() + t_base, s.triangles.data(),
+                    s.triangles.size() * sizeof(shader::MeshTriangle));
+        for (size_t k = 0; k < s.bin_items.size(); ++k) bin_items.data<uint32_t>()[i_base + k] = s.bin_items[k] + t_base;
+        for (uint64_t b = 0; b < bins; ++b) offsets.data<uint32_t>()[v * bins + b] = s.bin_offsets[b] + i_base;
+        t_base += uint32_t(s.triangles.size()), i_base += uint32_t(s.bin_items.size());
+      }
+      offsets.data<uint32_t>()[count * bins] = i_base;
+      shader::MeshPush push{d.width, d.height, tx, ty, d.texture_width, d.texture_height, d.channels, d.repeat ? 1u : 0u};
+      sequence_.begin();
+      sequence_.dispatch(kernel_, {&triangles, &offsets, &bin_items, &texture, &coverage, &pixels}, &push, tx, ty, count);
+      sequence_.submit_and_wait();
+      std::memcpy(out.coverage.data() + first * n, coverage.data<uint32_t>(), 4 * n * count);
+      std::memcpy(out.pixels.data() + first * n * d.channels, pixels.data<float>(), 4 * n * d.channels * count);
+      first += count;
+    }
+    return out;
+  }
+
+ private:
+  vk::Buffer& buffer(std::unique_ptr<vk::Buffer>& slot, uint64_t bytes) {
+    if (!slot || slot->bytes() < bytes) {
+      slot.reset();
+      slot = std::make_unique<vk::Buffer>(context_, bytes);
+    }
+    return *slot;
+  }
+
+  vk::Context& context_;
+  vk::Sequence& sequence_;
+  uint64_t max_buffer_;
+  vk::Kernel kernel_;
+  std::unique_ptr<vk::Buffer> texture_, triangles_, offsets_, items_, coverage_, pixels_;
+};
 
 class VulkanEngine final : public Engine {
  public:
@@ -228,6 +312,12 @@ class VulkanEngine final : public Engine {
     }
   }
 
+  // Whole-mesh renders: see MeshRenderer.
+  MeshRenders render_mesh(const MeshRenderDesc& desc) override {
+    if (!mesh_renderer_) mesh_renderer_ = std::make_unique<MeshRenderer>(context_, sequence_, max_buffer_);
+    return mesh_renderer_->render(desc);
+  }
+
  private:
   std::unique_ptr<vk::Buffer> upload(const void* data, uint64_t bytes) {
     auto b = std::make_unique<vk::Buffer>(context_, std::max<uint64_t>(bytes, 4));
@@ -251,6 +341,7 @@ class VulkanEngine final : public Engine {
   std::unique_ptr<vk::Buffer> rgba_, full_, half_;
   std::unique_ptr<vk::Buffer> pair_a_, pair_b_, pair_out_;
   std::unique_ptr<vk::Buffer> candidates_, scratch_, results_;
+  std::unique_ptr<MeshRenderer> mesh_renderer_;  // whole-mesh renders, made on first use
 };
 
 }  // namespace

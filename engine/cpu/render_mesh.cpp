@@ -1,0 +1,137 @@
+// Whole-mesh renders on the CPU: the reference for render_mesh.comp (same integer
+// rasterization, same fp32 operations in the same order) and the Engine default.
+#include "mesh_render.h"
+
+#include <algorithm>
+#include <cmath>
+#include <thread>
+
+namespace uvpress::engine {
+namespace mesh {
+
+namespace {
+
+int32_t edge(int32_t ax, int32_t ay, int32_t bx, int32_t by, int32_t px, int32_t py) {
+  return (bx - ax) * (py - ay) - (by - ay) * (px - ax);
+}
+
+bool owns_edge(int32_t ax, int32_t ay, int32_t bx, int32_t by) {
+  const int32_t dx = bx - ax, dy = by - ay;
+  return dy > 0 || (dy == 0 && dx < 0);
+}
+
+float plane(const float c[3], float fx, float fy) {
+  float v = c[0] + c[1] * fx;
+  v += c[2] * fy;
+  return v;
+}
+
+int32_t wrap(int32_t i, int32_t n) {
+  const int32_t r = i % n;
+  return r < 0 ? r + n : r;
+}
+
+}  // namespace
+
+void shade_tile(const MeshRenderDesc& d, const ViewSetup& setup, uint32_t tx, uint32_t ty, uint32_t* coverage,
+                float* pixels) {
+  const uint32_t bin = ty * tiles_x(d) + tx;
+  const uint32_t first = setup.bin_offsets[bin], last = setup.bin_offsets[bin + 1];
+  const uint32_t C = d.channels;
+  const int32_t TW = int32_t(d.texture_width), TH = int32_t(d.texture_height);
+  for (uint32_t j = ty * shader::kMeshTile; j < std::min(d.height, (ty + 1) * shader::kMeshTile); ++j)
+    for (uint32_t i = tx * shader::kMeshTile; i < std::min(d.width, (tx + 1) * shader::kMeshTile); ++i) {
+      const int32_t px = 16 * int32_t(i) + 8, py = 16 * int32_t(j) + 8;
+      const float cx = float(i) + 0.5f, cy = float(j) + 0.5f;
+      uint32_t best = kNoMeshTriangle;
+      float best_z = 0.0f;
+      for (uint32_t k = first; k < last; ++k) {
+        const MeshTriangle& r = setup.triangles[setup.bin_items[k]];
+        const int32_t e0 = edge(r.x1, r.y1, r.x2, r.y2, px, py), e1 = edge(r.x2, r.y2, r.x0, r.y0, px, py),
+                      e2 = edge(r.x0, r.y0, r.x1, r.y1, px, py);
+        if (e0 < 0 || e1 < 0 || e2 < 0) continue;
+        if ((e0 == 0 && !owns_edge(r.x1, r.y1, r.x2, r.y2)) || (e1 == 0 && !owns_edge(r.x2, r.y2, r.x0, r.y0)) ||
+            (e2 == 0 && !owns_edge(r.x0, r.y0, r.x1, r.y1)))
+          continue;
+        const float fx = cx - float(r.x0) * 0.0625f, fy = cy - float(r.y0) * 0.0625f;
+        const float z = plane(r.inv_w, fx, fy);
+        if (best == kNoMeshTriangle || z > best_z) best = setup.bin_items[k], best_z = z;
+      }
+      const size_t p = size_t(j) * d.width + i;
+      float* out = pixels + p * C;
+      if (best == kNoMeshTriangle) {
+        coverage[p] = kNoMeshTriangle;
+        for (uint32_t c = 0; c < C; ++c) out[c] = 0.0f;
+        continue;
+      }
+      const MeshTriangle& r = setup.triangles[best];
+      coverage[p] = r.index;
+      const float fx = cx - float(r.x0) * 0.0625f, fy = cy - float(r.y0) * 0.0625f;
+      const float iw = plane(r.inv_w, fx, fy);
+      float s = plane(r.s_w, fx, fy) / iw;
+      float t = plane(r.t_w, fx, fy) / iw;
+      int32_t i0, j0, i1, j1;
+      float fs, ft;
+      if (d.repeat) {
+        s = std::min(std::max(s, -16777216.0f), 16777216.0f);
+        t = std::min(std::max(t, -16777216.0f), 16777216.0f);
+        const float fs0 = std::floor(s), ft0 = std::floor(t);
+        fs = s - fs0, ft = t - ft0;
+        i0 = wrap(int32_t(fs0), TW), j0 = wrap(int32_t(ft0), TH);
+        i1 = wrap(i0 + 1, TW), j1 = wrap(j0 + 1, TH);
+      } else {
+        s = std::min(std::max(s, 0.0f), float(TW - 1));
+        t = std::min(std::max(t, 0.0f), float(TH - 1));
+        const float fs0 = std::floor(s), ft0 = std::floor(t);
+        fs = s - fs0, ft = t - ft0;
+        i0 = int32_t(fs0), j0 = int32_t(ft0);
+        i1 = std::min(i0 + 1, TW - 1), j1 = std::min(j0 + 1, TH - 1);
+      }
+      const float* t00 = d.texture + (size_t(j0) * size_t(TW) + size_t(i0)) * C;
+      const float* t10 = d.texture + (size_t(j0) * size_t(TW) + size_t(i1)) * C;
+      const float* t01 = d.texture + (size_t(j1) * size_t(TW) + size_t(i0)) * C;
+      const float* t11 = d.texture + (size_t(j1) * size_t(TW) + size_t(i1)) * C;
+      for (uint32_t c = 0; c < C; ++c) {
+        float top = (1.0f - fs) * t00[c];
+        top += fs * t10[c];
+        float bottom = (1.0f - fs) * t01[c];
+        bottom += fs * t11[c];
+        float v = (1.0f - ft) * top;
+        v += ft * bottom;
+        out[c] = v;
+      }
+    }
+}
+
+}  // namespace mesh
+
+MeshRenders Engine::render_mesh(const MeshRenderDesc& d) {
+  check_mesh_render(d);
+  MeshRenders out;
+  out.width = d.width, out.height = d.height, out.count = uint32_t(d.cameras.size()), out.channels = d.channels;
+  const size_t n = size_t(d.width) * d.height;
+  out.coverage.resize(n * out.count);
+  out.pixels.resize(n * out.count * d.channels);
+  const uint32_t tx = mesh::tiles_x(d), ty = mesh::tiles_y(d);
+  std::vector<mesh::ViewSetup> setups(out.count);
+  const unsigned threads = std::max(1u, device().backend == "cpu" ? device().threads : std::thread::hardware_concurrency());
+  // Work items: view set-ups, then tile rows of every view; results depend only on the item.
+  auto run = [&](uint32_t items, auto fn) {
+    const unsigned t = std::max(1u, std::min<unsigned>(threads, items));
+    std::vector<std::thread> pool;
+    for (unsigned k = 0; k < t; ++k)
+      pool.emplace_back([=] {
+        for (uint32_t i = uint32_t(uint64_t(items) * k / t); i < uint32_t(uint64_t(items) * (k + 1) / t); ++i) fn(i);
+      });
+    for (auto& th : pool) th.join();
+  };
+  run(out.count, [&](uint32_t v) { setups[v] = mesh::setup_view(d, v); });
+  run(out.count * ty, [&](uint32_t item) {
+    const uint32_t v = item / ty, row = item % ty;
+    for (uint32_t a = 0; a < tx; ++a)
+      mesh::shade_tile(d, setups[v], a, row, out.coverage.data() + v * n, out.pixels.data() + v * n * d.channels);
+  });
+  return out;
+}
+
+}  // namespace uvpress::engine

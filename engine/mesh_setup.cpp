@@ -1,0 +1,112 @@
+// Triangle set-up and binning of whole-mesh views (see mesh_render.h), shared by backends.
+#include "mesh_render.h"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+namespace uvpress::engine {
+
+void check_mesh_render(const MeshRenderDesc& d) {
+  if (d.width < 8 || d.height < 8 || d.width > mesh::kMaxSide || d.height > mesh::kMaxSide)
+    throw EngineError("render_mesh: image sides must be 8..1024 pixels");
+  if (d.channels < 1 || d.channels > 4) throw EngineError("render_mesh: 1..4 channels");
+  if (!d.texture || d.texture_width == 0 || d.texture_height == 0) throw EngineError("render_mesh: no texture");
+  if (d.triangle_count && (!d.positions || !d.indices || !d.uvs)) throw EngineError("render_mesh: no mesh arrays");
+  if (d.triangle_count >= kNoMeshTriangle) throw EngineError("render_mesh: too many triangles");
+  for (size_t k = 0; k < 3 * d.triangle_count; ++k)
+    if (d.indices[k] >= d.vertex_count) throw EngineError("render_mesh: index out of range");
+}
+
+namespace mesh {
+
+uint32_t tiles_x(const MeshRenderDesc& d) { return (d.width + shader::kMeshTile - 1) / shader::kMeshTile; }
+uint32_t tiles_y(const MeshRenderDesc& d) { return (d.height + shader::kMeshTile - 1) / shader::kMeshTile; }
+
+namespace {
+
+int64_t edge64(int64_t ax, int64_t ay, int64_t bx, int64_t by, int64_t px, int64_t py) {
+  return (bx - ax) * (py - ay) - (by - ay) * (px - ax);
+}
+
+}  // namespace
+
+ViewSetup setup_view(const MeshRenderDesc& d, uint32_t view) {
+  ViewSetup out;
+  const auto& m = d.cameras.at(view);
+  const uint32_t tx = tiles_x(d), ty = tiles_y(d);
+  std::vector<std::vector<uint32_t>> bins(size_t(tx) * ty);
+  const double lo_x = -kGuardBand, hi_x = double(d.width) + kGuardBand;
+  const double lo_y = -kGuardBand, hi_y = double(d.height) + kGuardBand;
+  for (size_t t = 0; t < d.triangle_count; ++t) {
+    double X[3], Y[3], W[3], S[3], T[3];
+    bool keep = true;
+    for (int k = 0; k < 3; ++k) {
+      const float* p = d.positions + 3 * size_t(d.indices[3 * t + size_t(k)]);
+      const float* uv = d.uvs + 2 * size_t(d.indices[3 * t + size_t(k)]);
+      double c[4];
+      for (int r = 0; r < 4; ++r)
+        c[r] = double(m[size_t(4 * r)]) * p[0] + double(m[size_t(4 * r + 1)]) * p[1] +
+               double(m[size_t(4 * r + 2)]) * p[2] + double(m[size_t(4 * r + 3)]);
+      if (!(c[3] > kNearW)) {
+        keep = false;
+        break;
+      }
+      X[k] = (c[0] / c[3] * 0.5 + 0.5) * d.width;
+      Y[k] = (0.5 - 0.5 * c[1] / c[3]) * d.height;
+      if (!(X[k] >= lo_x && X[k] <= hi_x && Y[k] >= lo_y && Y[k] <= hi_y)) {
+        keep = false;
+        break;
+      }
+      W[k] = 1.0 / c[3];
+      S[k] = double(uv[0]) * d.texture_width - 0.5;
+      T[k] = double(uv[1]) * d.texture_height - 0.5;
+    }
+    if (!keep) continue;
+    int32_t x[3], y[3];
+    for (int k = 0; k < 3; ++k) x[k] = int32_t(std::floor(X[k] * 16.0 + 0.5)), y[k] = int32_t(std::floor(Y[k] * 16.0 + 0.5));
+    int64_t area = edge64(x[0], y[0], x[1], y[1], x[2], y[2]);
+    if (area == 0) continue;
+    int o[3] = {0, 1, 2};
+    if (area < 0) std::swap(o[1], o[2]);
+    MeshTriangle r{};
+    r.x0 = x[o[0]], r.y0 = y[o[0]], r.x1 = x[o[1]], r.y1 = y[o[1]], r.x2 = x[o[2]], r.y2 = y[o[2]];
+    // Planes relative to vertex 0 over the snapped positions, solved in double.
+    const double dx1 = (r.x1 - r.x0) / 16.0, dy1 = (r.y1 - r.y0) / 16.0;
+    const double dx2 = (r.x2 - r.x0) / 16.0, dy2 = (r.y2 - r.y0) / 16.0;
+    const double det = dx1 * dy2 - dx2 * dy1;
+    auto plane = [&](const double f[3], float out[3]) {
+      const double f0 = f[o[0]], f1 = f[o[1]] - f0, f2 = f[o[2]] - f0;
+      out[0] = float(f0);
+      out[1] = float((f1 * dy2 - f2 * dy1) / det);
+      out[2] = float((dx1 * f2 - dx2 * f1) / det);
+    };
+    double SW[3], TW[3];
+    for (int k = 0; k < 3; ++k) SW[k] = S[k] * W[k], TW[k] = T[k] * W[k];
+    plane(W, r.inv_w);
+    plane(SW, r.s_w);
+    plane(TW, r.t_w);
+    r.index = uint32_t(t);
+    // Pixel range: centres (16 i + 8) within the snapped box.
+    const int32_t bx0 = std::min({r.x0, r.x1, r.x2}), bx1 = std::max({r.x0, r.x1, r.x2});
+    const int32_t by0 = std::min({r.y0, r.y1, r.y2}), by1 = std::max({r.y0, r.y1, r.y2});
+    const int32_t i_lo = std::max(0, (bx0 - 8 + 15) >> 4), i_hi = std::min(int32_t(d.width) - 1, (bx1 - 8) >> 4);
+    const int32_t j_lo = std::max(0, (by0 - 8 + 15) >> 4), j_hi = std::min(int32_t(d.height) - 1, (by1 - 8) >> 4);
+    if (i_lo > i_hi || j_lo > j_hi) continue;
+    const uint32_t id = uint32_t(out.triangles.size());
+    out.triangles.push_back(r);
+    const int32_t ts = int32_t(shader::kMeshTile);
+    for (int32_t b = j_lo / ts; b <= j_hi / ts; ++b)
+      for (int32_t a = i_lo / ts; a <= i_hi / ts; ++a) bins[size_t(b) * tx + size_t(a)].push_back(id);
+  }
+  out.bin_offsets.resize(bins.size() + 1);
+  size_t total = 0;
+  for (size_t b = 0; b < bins.size(); ++b) out.bin_offsets[b] = uint32_t(total), total += bins[b].size();
+  out.bin_offsets.back() = uint32_t(total);
+  out.bin_items.reserve(total);
+  for (const auto& b : bins) out.bin_items.insert(out.bin_items.end(), b.begin(), b.end());
+  return out;
+}
+
+}  // namespace mesh
+}  // namespace uvpress::engine

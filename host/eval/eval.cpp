@@ -1,0 +1,465 @@
+// q-c curves over 20 dodecahedron views (see eval.h).
+#include "eval.h"
+
+#include "core/error.h"
+#include "cpu/gmsd.h"
+#include "layout.h"
+#include "perceptual/triangle_view.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <thread>
+
+namespace uvpress::eval {
+
+using detail::LayoutMesh;
+
+std::vector<std::array<float, 16>> dodecahedron_cameras(const float* p, size_t n, double fov_degrees) {
+  double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
+  for (size_t v = 0; v < n; ++v)
+    for (int d = 0; d < 3; ++d) lo[d] = std::min(lo[d], double(p[3 * v + size_t(d)])), hi[d] = std::max(hi[d], double(p[3 * v + size_t(d)]));
+  double c[3], radius = 0;
+  for (int d = 0; d < 3; ++d) c[d] = n ? 0.5 * (lo[d] + hi[d]) : 0.0;
+  for (size_t v = 0; v < n; ++v) {
+    double r2 = 0;
+    for (int d = 0; d < 3; ++d) r2 += (p[3 * v + size_t(d)] - c[d]) * (p[3 * v + size_t(d)] - c[d]);
+    radius = std::max(radius, std::sqrt(r2));
+  }
+  if (!(radius > 0)) radius = 1;
+  const double half = 0.5 * fov_degrees * M_PI / 180.0;
+  const double dist = 1.02 * radius / std::sin(half);  // the sphere just inside the frame
+  const double near = 0.5 * (dist - radius), far = dist + 2 * radius, fy = 1 / std::tan(half);
+  // The 20 vertices of a regular dodecahedron: (+-1, +-1, +-1), (0, +-1/phi, +-phi),
+  // (+-1/phi, +-phi, 0), (+-phi, 0, +-1/phi).
+  const double phi = (1 + std::sqrt(5.0)) / 2, ip = 1 / phi;
+  std::vector<std::array<double, 3>> dirs;
+  for (int a : {-1, 1})
+    for (int b : {-1, 1})
+      for (int e : {-1, 1}) dirs.push_back({double(a), double(b), double(e)});
+  for (int a : {-1, 1})
+    for (int b : {-1, 1}) {
+      dirs.push_back({0, a * ip, b * phi});
+      dirs.push_back({a * ip, b * phi, 0});
+      dirs.push_back({a * phi, 0, b * ip});
+    }
+  std::vector<std::array<float, 16>> out;
+  for (auto dir : dirs) {
+    const double len = std::sqrt(dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]);
+    double eye[3], f[3], up[3] = {0, 1, 0}, r[3], u[3];
+    for (int d = 0; d < 3; ++d) f[d] = -dir[size_t(d)] / len, eye[d] = c[d] - dist * f[d];
+    if (std::abs(f[1]) > 0.99) up[1] = 0, up[2] = 1;
+    r[0] = f[1] * up[2] - f[2] * up[1], r[1] = f[2] * up[0] - f[0] * up[2], r[2] = f[0] * up[1] - f[1] * up[0];
+    const double rl = std::sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
+    for (double& x : r) x /= rl;
+    u[0] = r[1] * f[2] - r[2] * f[1], u[1] = r[2] * f[0] - r[0] * f[2], u[2] = r[0] * f[1] - r[1] * f[0];
+    // View rows (right, up, -forward), then the OpenGL perspective projection.
+    double V[4][4] = {{r[0], r[1], r[2], 0}, {u[0], u[1], u[2], 0}, {-f[0], -f[1], -f[2], 0}, {0, 0, 0, 1}};
+    for (int row = 0; row < 3; ++row) V[row][3] = -(V[row][0] * eye[0] + V[row][1] * eye[1] + V[row][2] * eye[2]);
+    const double P[4][4] = {{fy, 0, 0, 0},
+                            {0, fy, 0, 0},
+                            {0, 0, (far + near) / (near - far), 2 * far * near / (near - far)},
+                            {0, 0, -1, 0}};
+    std::array<float, 16> m{};
+    for (int i = 0; i < 4; ++i)
+      for (int j = 0; j < 4; ++j) {
+        double s = 0;
+        for (int k = 0; k < 4; ++k) s += P[i][k] * V[k][j];
+        m[size_t(4 * i + j)] = float(s);
+      }
+    out.push_back(m);
+  }
+  return out;
+}
+
+namespace {
+
+// Per output index: (source index, weight) with weights summing to 1.
+std::vector<std::vector<std::pair<uint32_t, double>>> axis_weights(uint32_t from, uint32_t to) {
+  std::vector<std::vector<std::pair<uint32_t, double>>> w(to);
+  const double scale = double(from) / to;
+  for (uint32_t k = 0; k < to; ++k) {
+    if (from == to) {
+      w[k] = {{k, 1.0}};
+    } else if (to < from) {
+      const double a = k * scale, b = (k + 1) * scale;
+      for (uint32_t i = uint32_t(std::floor(a)); i < std::min<uint32_t>(from, uint32_t(std::ceil(b))); ++i) {
+        const double overlap = std::min(b, i + 1.0) - std::max(a, double(i));
+        if (overlap > 0) w[k].push_back({i, overlap / scale});
+      }
+    } else {
+      const double s = std::clamp((k + 0.5) * scale - 0.5, 0.0, double(from - 1));
+      const uint32_t i0 = uint32_t(std::floor(s)), i1 = std::min(i0 + 1, from - 1);
+      const double f = s - i0;
+      w[k] = {{i0, 1 - f}, {i1, f}};
+    }
+  }
+  return w;
+}
+
+double seconds_since(std::chrono::steady_clock::time_point t) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+}
+
+}  // namespace
+
+Image resize_area(const Image& in, uint32_t W, uint32_t H) {
+  if (W == in.width && H == in.height) return in;
+  const uint32_t C = in.channels;
+  auto wx = axis_weights(in.width, W), wy = axis_weights(in.height, H);
+  std::vector<double> rows(size_t(in.height) * W * C, 0.0);
+  for (uint32_t j = 0; j < in.height; ++j)
+    for (uint32_t i = 0; i < W; ++i)
+      for (auto [src, w] : wx[i])
+        for (uint32_t c = 0; c < C; ++c) rows[(size_t(j) * W + i) * C + c] += w * in.pixels[(size_t(j) * in.width + src) * C + c];
+  Image out;
+  out.width = W, out.height = H, out.channels = C, out.bits = in.bits;
+  out.pixels.assign(size_t(W) * H * C, 0.0f);
+  for (uint32_t j = 0; j < H; ++j)
+    for (uint32_t i = 0; i < W; ++i)
+      for (uint32_t c = 0; c < C; ++c) {
+        double s = 0;
+        for (auto [src, w] : wy[j]) s += w * rows[(size_t(src) * W + i) * C + c];
+        out.pixels[(size_t(j) * W + i) * C + c] = float(s);
+      }
+  return out;
+}
+
+Savings pixel_ratio_at_equal_q(const std::vector<std::pair<double, double>>& a,
+                               const std::vector<std::pair<double, double>>& b) {
+  constexpr double kFloor = 1e-9;  // q = 0 (a perfect copy) has no logarithm
+  // A's curve made non-increasing (its lower envelope from the left): cost at which A
+  // first reaches q, log-log interpolated.
+  std::vector<std::pair<double, double>> env;
+  for (auto [c, q] : a) {
+    q = std::max(q, kFloor);
+    if (env.empty() || q < env.back().second) env.push_back({c, q});
+  }
+  Savings s;
+  if (env.empty()) return s;
+  const double q_hi = env.front().second, q_lo = env.back().second;
+  double log_sum = 0;
+  for (auto [cb, qb] : b) {
+    if (!(qb > kFloor) || qb > q_hi || qb < q_lo) continue;
+    double ca = env.front().first;
+    for (size_t i = 1; i < env.size(); ++i)
+      if (env[i].second <= qb) {
+        const double t = (std::log(env[i - 1].second) - std::log(qb)) / (std::log(env[i - 1].second) - std::log(env[i].second));
+        ca = std::exp(std::log(env[i - 1].first) + t * (std::log(env[i].first) - std::log(env[i - 1].first)));
+        break;
+      }
+    log_sum += std::log(ca / cb);
+    if (s.points == 0) s.q_lo = s.q_hi = qb;
+    s.q_lo = std::min(s.q_lo, qb), s.q_hi = std::max(s.q_hi, qb);
+    ++s.points;
+  }
+  s.ratio = s.points ? std::exp(log_sum / double(s.points)) : std::numeric_limits<double>::quiet_NaN();
+  return s;
+}
+
+namespace {
+
+struct Timing {
+  double textures = 0, render = 0, gmsd = 0;
+};
+
+std::vector<float> luminance_render(engine::Engine& engine, const LayoutMesh& m, const Image& texture,
+                                    const std::vector<std::array<float, 16>>& cameras, uint32_t res, Timing& timing) {
+  std::vector<float> lum = perceptual::luminance_plane(texture);
+  engine::MeshRenderDesc d;
+  d.width = d.height = res;
+  d.cameras = cameras;
+  d.positions = m.positions.data(), d.vertex_count = m.positions.size() / 3;
+  d.indices = m.indices.data(), d.triangle_count = m.indices.size() / 3;
+  d.uvs = m.uvs.data();
+  d.texture = lum.data(), d.texture_width = texture.width, d.texture_height = texture.height, d.channels = 1;
+  d.repeat = m.repeat;
+  const auto t0 = std::chrono::steady_clock::now();
+  auto r = engine.render_mesh(d);
+  timing.render += seconds_since(t0);
+  return std::move(r.pixels);
+}
+
+std::vector<float> gmsd_views(engine::Engine& engine, const std::vector<float>& ref, const std::vector<float>& img,
+                              uint32_t res, size_t views, Timing& timing) {
+  const auto t0 = std::chrono::steady_clock::now();
+  std::vector<float> out(views);
+  if (res <= shader::kViewMaxSize) {
+    engine::ImagePairs pairs{res, res, uint32_t(views), ref.data(), img.data()};
+    out = engine.gmsd(pairs);
+  } else {
+    const size_t n = size_t(res) * res;
+    const unsigned threads = std::max(1u, std::min<unsigned>(std::thread::hardware_concurrency(), unsigned(views)));
+    std::vector<std::thread> pool;
+    for (unsigned k = 0; k < threads; ++k)
+      pool.emplace_back([&, k] {
+        for (size_t v = k; v < views; v += threads) out[v] = engine::cpu::gmsd<float>(ref.data() + v * n, img.data() + v * n, res, res);
+      });
+    for (auto& t : pool) t.join();
+  }
+  timing.gmsd += seconds_since(t0);
+  return out;
+}
+
+// Texture size of `m` at relative cost c_r: W H uv_area = c_r c_ref, aspect of `full`.
+std::pair<uint32_t, uint32_t> size_at(double c_r, double c_ref, double uv_area, double aspect) {
+  const double texels = c_r * c_ref / uv_area;
+  const double w = std::sqrt(texels * aspect);
+  const uint32_t W = uint32_t(std::clamp(std::round(w), 1.0, 16384.0));
+  const uint32_t H = uint32_t(std::clamp(std::round(w / aspect), 1.0, 16384.0));
+  return {W, H};
+}
+
+// A 5 x 4 sheet of RGB renders (values clamped to [0,1]).
+Image contact_sheet(engine::Engine& engine, const LayoutMesh& m, const Image& texture,
+                    const std::vector<std::array<float, 16>>& cameras, uint32_t thumb) {
+  engine::MeshRenderDesc d;
+  d.width = d.height = thumb;
+  d.cameras = cameras;
+  d.positions = m.positions.data(), d.vertex_count = m.positions.size() / 3;
+  d.indices = m.indices.data(), d.triangle_count = m.indices.size() / 3;
+  d.uvs = m.uvs.data();
+  d.texture = texture.pixels.data(), d.texture_width = texture.width, d.texture_height = texture.height, d.channels = 3;
+  d.repeat = m.repeat;
+  auto r = engine.render_mesh(d);
+  Image sheet;
+  const uint32_t cols = 5, rows = uint32_t((cameras.size() + cols - 1) / cols);
+  sheet.width = cols * thumb, sheet.height = rows * thumb, sheet.channels = 3, sheet.bits = 8;
+  sheet.pixels.assign(size_t(sheet.width) * sheet.height * 3, 0.0f);
+  for (size_t v = 0; v < cameras.size(); ++v)
+    for (uint32_t j = 0; j < thumb; ++j)
+      for (uint32_t i = 0; i < thumb; ++i)
+        for (uint32_t c = 0; c < 3; ++c) {
+          const size_t x = (v % cols) * thumb + i, y = (v / cols) * thumb + j;
+          sheet.pixels[(y * sheet.width + x) * 3 + c] =
+              std::clamp(r.pixels[((v * thumb + j) * thumb + i) * 3 + c], 0.0f, 1.0f);
+        }
+  return sheet;
+}
+
+// The layout in UV space, each triangle coloured by log2 of its texel density relative to
+// the layout's mean (blue: fewer texels per surface area, red: more), on dark grey.
+Image uv_plot(const LayoutMesh& m, double aspect, double* spread) {
+  const uint32_t W = aspect >= 1 ? 512 : uint32_t(std::max(64.0, std::round(512 * aspect)));
+  const uint32_t H = aspect >= 1 ? uint32_t(std::max(64.0, std::round(512 / aspect))) : 512;
+  Image img;
+  img.width = W, img.height = H, img.channels = 3, img.bits = 8;
+  img.pixels.assign(size_t(W) * H * 3, 0.18f);
+  const double mean = m.uv_area / m.area3d;
+  double wsum = 0, w2 = 0;
+  for (size_t t = 0; t < m.indices.size() / 3; ++t) {
+    const double a3 = detail::area3d(m.positions, m.indices, t), a2 = detail::uv_area(m.uvs, m.indices, t);
+    if (!(a3 > 0)) continue;
+    // Density is per length: half the log of the area ratio.
+    const double l = std::clamp(0.5 * std::log2(std::max(a2, 1e-30) / a3 / mean), -2.0, 2.0);
+    wsum += a3, w2 += a3 * l * l;
+    const double x = std::abs(l) / 2;
+    const float rgb[3] = {float(l > 0 ? 1.0 : 1.0 - 0.8 * x), float(1.0 - 0.8 * x), float(l < 0 ? 1.0 : 1.0 - 0.8 * x)};
+    double px[3], py[3];
+    for (int k = 0; k < 3; ++k) {
+      double u = m.uvs[2 * size_t(m.indices[3 * t + size_t(k)])], v = m.uvs[2 * size_t(m.indices[3 * t + size_t(k)]) + 1];
+      if (m.repeat) u -= std::floor(u), v -= std::floor(v);  // tiled layouts folded into one tile
+      px[k] = u * W, py[k] = v * H;
+    }
+    const double det = (px[1] - px[0]) * (py[2] - py[0]) - (px[2] - px[0]) * (py[1] - py[0]);
+    if (std::abs(det) < 1e-12) continue;
+    const int i0 = std::max(0, int(std::floor(std::min({px[0], px[1], px[2]})))),
+              i1 = std::min(int(W) - 1, int(std::ceil(std::max({px[0], px[1], px[2]}))));
+    const int j0 = std::max(0, int(std::floor(std::min({py[0], py[1], py[2]})))),
+              j1 = std::min(int(H) - 1, int(std::ceil(std::max({py[0], py[1], py[2]}))));
+    for (int j = j0; j <= j1; ++j)
+      for (int i = i0; i <= i1; ++i) {
+        const double x0 = i + 0.5, y0 = j + 0.5;
+        const double b1 = ((x0 - px[0]) * (py[2] - py[0]) - (px[2] - px[0]) * (y0 - py[0])) / det;
+        const double b2 = ((px[1] - px[0]) * (y0 - py[0]) - (x0 - px[0]) * (py[1] - py[0])) / det;
+        if (b1 < 0 || b2 < 0 || b1 + b2 > 1) continue;
+        // Thin dark edges show the triangles.
+        const double edge = std::min({b1, b2, 1 - b1 - b2}) * std::abs(det) /
+                            std::max({std::hypot(px[1] - px[0], py[1] - py[0]), std::hypot(px[2] - px[0], py[2] - py[0]),
+                                      std::hypot(px[2] - px[1], py[2] - py[1])});
+        const float shade = edge < 0.35 ? 0.55f : 1.0f;
+        for (int c = 0; c < 3; ++c) img.pixels[(size_t(j) * W + size_t(i)) * 3 + size_t(c)] = rgb[c] * shade;
+      }
+  }
+  if (spread) *spread = wsum > 0 ? std::sqrt(w2 / wsum) : 0;
+  return img;
+}
+
+}  // namespace
+
+nlohmann::ordered_json evaluate(const io::GltfFile& reference, const std::vector<LayoutInput>& others,
+                                engine::Engine& engine, const EvalOptions& o, EvalArtifacts* artifacts,
+                                const Progress& progress) {
+  const auto t_start = std::chrono::steady_clock::now();
+  if (o.cost_grid.empty()) throw InputError(reference.path, "empty cost grid");
+  for (double c : o.cost_grid)
+    if (!(c > 0 && c <= 4)) throw InputError(reference.path, "cost grid values must lie in (0, 4]");
+  if (o.resolution < 8 || o.resolution > 1024) throw InputError(reference.path, "resolution must be 8..1024");
+  Timing timing;
+  LayoutMesh ref = detail::extract_layout(reference, "input");
+  const auto cameras = dodecahedron_cameras(ref.positions.data(), ref.positions.size() / 3, o.fov_degrees);
+  const uint32_t res = o.resolution;
+  const double c_ref = double(ref.full.width) * ref.full.height * ref.uv_area;
+  double radius = 0;
+  {
+    double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
+    for (size_t v = 0; v < ref.positions.size() / 3; ++v)
+      for (int d = 0; d < 3; ++d) lo[d] = std::min(lo[d], double(ref.positions[3 * v + size_t(d)])), hi[d] = std::max(hi[d], double(ref.positions[3 * v + size_t(d)]));
+    for (int d = 0; d < 3; ++d) radius = std::max(radius, hi[d] - lo[d]);
+  }
+  const std::vector<float> ref_views = luminance_render(engine, ref, ref.full, cameras, res, timing);
+
+  // The layouts with their full textures and aspects.
+  struct Entry {
+    LayoutMesh mesh;
+    double aspect = 1;
+    nlohmann::ordered_json extra = nlohmann::ordered_json::object();
+  };
+  std::vector<Entry> layouts;
+  layouts.push_back({ref, double(ref.full.width) / ref.full.height, {}});
+  for (const auto& other : others) {
+    Entry e;
+    e.mesh = detail::extract_layout(*other.file, other.name);
+    if (e.mesh.indices.size() != ref.indices.size())
+      throw InputError(other.file->path, "not the same mesh as " + reference.path + " (" +
+                                             std::to_string(e.mesh.indices.size() / 3) + " textured triangles, not " +
+                                             std::to_string(ref.indices.size() / 3) + ")");
+    e.aspect = double(e.mesh.full.width) / e.mesh.full.height;
+    if (detail::same_triangles(ref, e.mesh, 1e-5 * radius)) {
+      auto [W, H] = size_at(1.0, c_ref, e.mesh.uv_area, e.aspect);
+      const auto t0 = std::chrono::steady_clock::now();
+      std::string method;
+      e.mesh.full = detail::rebake_from(ref, e.mesh, W, H, &method);
+      timing.textures += seconds_since(t0);
+      e.mesh.texture_source = "rebaked";
+      e.extra["rebake"] = method;
+    } else {
+      e.mesh.texture_source = "own";
+    }
+    e.mesh.repeat = ref.repeat;
+    layouts.push_back(std::move(e));
+  }
+  if (o.flatten) {
+    if (progress) progress("flatten", 0, 1);
+    Entry e;
+    e.mesh = ref;
+    e.mesh.name = "flatten", e.mesh.file = "", e.mesh.texture_source = "rebaked";
+    nlohmann::ordered_json info;
+    e.mesh.uvs = detail::isometric_uvs(ref, &e.aspect, &info);
+    e.mesh.uv_area = 0;
+    for (size_t t = 0; t < e.mesh.indices.size() / 3; ++t) e.mesh.uv_area += detail::uv_area(e.mesh.uvs, e.mesh.indices, t);
+    e.mesh.repeat = false;
+    auto [W, H] = size_at(1.0, c_ref, e.mesh.uv_area, e.aspect);
+    const auto t0 = std::chrono::steady_clock::now();
+    std::string method;
+    e.mesh.full = detail::rebake_from(ref, e.mesh, W, H, &method);
+    timing.textures += seconds_since(t0);
+    e.extra = {{"flatten", info}, {"rebake", method}};
+    layouts.push_back(std::move(e));
+  }
+
+  // Contact sheet cost: the grid point nearest the request (default 0.25).
+  const double want = o.contact_cost > 0 ? o.contact_cost : 0.25;
+  double contact = o.cost_grid.front();
+  for (double c : o.cost_grid)
+    if (std::abs(std::log(c / want)) < std::abs(std::log(contact / want))) contact = c;
+  const uint32_t thumb = std::clamp<uint32_t>(o.thumbnail, 8, 1024);
+  if (artifacts && o.artifacts) {
+    artifacts->reference_contact = contact_sheet(engine, ref, ref.full, cameras, thumb);
+    artifacts->layouts.clear();
+  }
+
+  nlohmann::ordered_json report;
+  const auto dev = engine.device();
+  report["asset"] = reference.path;
+  report["device"] = {{"backend", dev.backend}, {"name", dev.name}, {"type", dev.type}, {"threads", dev.threads}};
+  report["views"] = cameras.size();
+  report["resolution"] = res;
+  report["fov_degrees"] = o.fov_degrees;
+  report["texture_filter"] = "bilinear (no mip-maps)";
+  report["triangles"] = ref.indices.size() / 3;
+  report["reference"] = {{"file", reference.path}, {"image", ref.image}, {"width", ref.full.width},
+                         {"height", ref.full.height}, {"uv_area", ref.uv_area}, {"cost_texels", c_ref}};
+  report["cost_grid"] = o.cost_grid;
+  report["contact_c_r"] = contact;
+  nlohmann::ordered_json out_layouts = nlohmann::ordered_json::array();
+  std::vector<std::vector<std::pair<double, double>>> curves;
+  size_t step = 0;
+  const size_t steps = layouts.size() * o.cost_grid.size();
+  for (auto& e : layouts) {
+    const LayoutMesh& m = e.mesh;
+    nlohmann::ordered_json L;
+    L["name"] = m.name;
+    L["file"] = m.file;
+    L["texture"] = m.texture_source;
+    L["full_size"] = {m.full.width, m.full.height};
+    L["uv_area"] = m.uv_area;
+    double spread = 0;
+    Image plot = uv_plot(m, e.aspect, &spread);
+    L["texel_density_spread_log2"] = spread;
+    for (auto& [k, v] : e.extra.items()) L[k] = v;
+    nlohmann::ordered_json curve = nlohmann::ordered_json::array();
+    std::vector<std::pair<double, double>> points;
+    for (double c_r : o.cost_grid) {
+      if (progress) progress("curve " + m.name, step, steps);
+      ++step;
+      auto [W, H] = size_at(c_r, c_ref, m.uv_area, e.aspect);
+      auto t0 = std::chrono::steady_clock::now();
+      Image tex = resize_area(m.full, W, H);
+      timing.textures += seconds_since(t0);
+      const auto views = luminance_render(engine, m, tex, cameras, res, timing);
+      const auto g = gmsd_views(engine, ref_views, views, res, cameras.size(), timing);
+      double q = 0;
+      for (float x : g) q += x;
+      q /= double(g.size());
+      const double actual = double(W) * H * m.uv_area / c_ref;
+      curve.push_back({{"c_r", c_r}, {"c_r_actual", actual}, {"r", W}, {"width", W}, {"height", H}, {"q", q},
+                       {"q_views", g}});
+      points.push_back({actual, q});
+      if (artifacts && o.artifacts && c_r == contact) {
+        LayoutArtifacts a;
+        a.name = m.name;
+        a.contact = contact_sheet(engine, m, tex, cameras, thumb);
+        a.uv_plot = plot;
+        artifacts->layouts.push_back(std::move(a));
+      }
+    }
+    std::sort(points.begin(), points.end());
+    curves.push_back(points);
+    L["curve"] = std::move(curve);
+    out_layouts.push_back(std::move(L));
+  }
+  report["layouts"] = std::move(out_layouts);
+
+  // Savings: every layout against the input's, and against the isometric one when present.
+  nlohmann::ordered_json savings = nlohmann::ordered_json::array();
+  std::vector<size_t> bases = {0};
+  if (o.flatten) bases.push_back(layouts.size() - 1);
+  for (size_t b : bases)
+    for (size_t a = 0; a < layouts.size(); ++a) {
+      if (a == b || (b != 0 && a == 0)) continue;
+      Savings s = pixel_ratio_at_equal_q(curves[a], curves[b]);
+      nlohmann::ordered_json row = {{"layout", layouts[a].mesh.name}, {"vs", layouts[b].mesh.name}};
+      if (s.points) {
+        row["pixel_ratio_at_equal_q"] = s.ratio;
+        row["pixel_savings"] = 1 - s.ratio;
+        row["q_range"] = {s.q_lo, s.q_hi};
+      } else {
+        row["pixel_ratio_at_equal_q"] = nullptr;
+        row["pixel_savings"] = nullptr;
+        row["q_range"] = nullptr;
+      }
+      row["points"] = s.points;
+      savings.push_back(std::move(row));
+    }
+  report["savings"] = std::move(savings);
+  report["seconds"] = {{"textures", timing.textures},
+                       {"render", timing.render},
+                       {"gmsd", timing.gmsd},
+                       {"total", seconds_since(t_start)}};
+  if (progress) progress("done", steps, steps);
+  return report;
+}
+
+}  // namespace uvpress::eval

@@ -1,0 +1,113 @@
+// `uvpress eval`: perceptual quality against pixel cost over 20 views (seed paper 001,
+// section 5.1, eq. 20-23), for several UV layouts of one asset at once.
+//
+// - Cameras: 20, at the vertices of a regular dodecahedron around the mesh's bounding
+//   sphere, looking at its centre, perspective (vertical field of view 30 degrees, the
+//   sphere just inside the frame), square images of `resolution` pixels.
+// - Renders: engine->render_mesh (CPU backend = oracle, Vulkan kernel render_mesh.comp).
+//   Texture filter: bilinear by hand in fp32, no mip-maps. At c_r <= 1 the layouts'
+//   textures have at most the reference's texel density, and the reference is rendered
+//   from the same views with the same filter, so magnification dominates; mip-maps would
+//   blur both images alike and hide exactly the texel-density differences eval measures.
+// - Reference: the input (first file) layout with its full texture, luminance.
+// - Layouts: "input" (the reference's own UVs), every other file (a glTF of the same mesh:
+//   reparam's output, an xatlas or Blender layout), and with `flatten` the isometric
+//   layout ("flatten": charts from the input's UV seams flattened by host/flatten's
+//   progressive solver, charts that are not disks keep their input UVs scaled to their 3-D
+//   area, laid out on shelves at one scale).
+// - Each layout's full texture: the input's own; for every other layout, the reference
+//   texture re-baked into its UVs (atlas::rebake when the tree has it, else a plain
+//   bilinear bake with a dilated gutter) at the size where c_r = 1, when its triangles
+//   correspond one to one with the reference's (same count, same corner positions);
+//   otherwise the file's own texture.
+// - Cost (eq. 20-21): c = W H sum|uv triangle area| (texels under the charts), c_r relative
+//   to the input layout with its full texture. For each c_r of the grid the layout's
+//   texture size keeps its aspect with W H = c_r c_ref / uv_area (rounded), the full
+//   texture is resized to it with an exact area (box) filter (bilinear when enlarging),
+//   the 20 views are rendered and q = mean GMSD against the reference views (eq. 22-23).
+//   GMSD: engine->gmsd for images up to 64 x 64, else engine/cpu/gmsd.h (fp32).
+// - Savings: for a layout A against B, the ratio c_A(q) / c_B(q) of the costs at which the
+//   two curves reach the same q, log-log interpolated, geometric mean over B's curve
+//   points inside A's q range.
+#pragma once
+
+#include "core/image.h"
+#include "engine.h"
+#include "io/gltf_io.h"
+
+#include <nlohmann/json.hpp>
+
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace uvpress::eval {
+
+struct EvalOptions {
+  std::vector<double> cost_grid = {0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0};
+  uint32_t resolution = 512;  // view images, pixels a side (8..1024)
+  bool flatten = false;       // add the isometric layout
+  double contact_cost = 0;    // c_r of the contact sheet; 0: the grid point nearest 0.25
+  uint32_t thumbnail = 160;   // contact sheet view size, pixels
+  bool artifacts = true;      // keep what write_html_report needs (contact sheets, UV plots)
+  double fov_degrees = 30;
+};
+
+// One layout to evaluate: a loaded glTF of the same mesh as the reference.
+struct LayoutInput {
+  std::string name;  // e.g. the file's stem
+  const io::GltfFile* file = nullptr;
+};
+
+// Images kept for the HTML report (8-bit RGB as floats in Image).
+struct LayoutArtifacts {
+  std::string name;
+  Image contact;  // the 20 views at the contact c_r, 5 x 4 thumbnails
+  Image uv_plot;  // the layout in UV space coloured by relative texel density
+};
+struct EvalArtifacts {
+  Image reference_contact;
+  std::vector<LayoutArtifacts> layouts;
+};
+
+using Progress = std::function<void(const std::string& stage, size_t done, size_t total)>;
+
+// Evaluates the reference's own layout ("input"), each of `others`, and the isometric
+// layout when options.flatten. The report (see README): asset, device, views, resolution,
+// cost_grid, layouts [{name, file, texture, uv_area, full_size, curve [{c_r, c_r_actual, r,
+// width, height, q}]}], savings [{layout, vs, pixel_ratio_at_equal_q, pixel_savings,
+// q_range, points}], contact_c_r, seconds. Throws InputError for assets without a
+// textured triangle primitive or layouts of another mesh.
+nlohmann::ordered_json evaluate(const io::GltfFile& reference, const std::vector<LayoutInput>& others,
+                                engine::Engine& engine, const EvalOptions& options = {},
+                                EvalArtifacts* artifacts = nullptr, const Progress& progress = {});
+
+// Writes DIR/index.html (offline: no scripts, no network), DIR/plot.svg (log q_r against
+// c_r by gnuplot when it is installed; the report says when it is not), DIR/contact-*.png
+// and DIR/uv-*.png. All files appear at once (temporaries renamed at the end). Throws
+// InputError(dir, reason).
+void write_html_report(const nlohmann::ordered_json& report, const EvalArtifacts& artifacts, const std::string& dir);
+
+// --- Parts, exposed for tests ---
+
+// 20 view-projection matrices (row-major, engine::MeshRenderDesc convention) around the
+// bounding sphere of `positions`.
+std::vector<std::array<float, 16>> dodecahedron_cameras(const float* positions, size_t vertex_count,
+                                                        double fov_degrees = 30);
+
+// Resizes to width x height: exact box filter per axis when shrinking, linear
+// interpolation (texel centres, clamp) when enlarging; the same size copies exactly.
+Image resize_area(const Image& image, uint32_t width, uint32_t height);
+
+// Savings of curve A against curve B: points (cost, q) by increasing cost. Returns the
+// geometric mean ratio c_A / c_B at equal q and the number of q levels used (0: the
+// curves' q ranges do not overlap; the ratio is then NaN).
+struct Savings {
+  double ratio = 0;
+  size_t points = 0;
+  double q_lo = 0, q_hi = 0;
+};
+Savings pixel_ratio_at_equal_q(const std::vector<std::pair<double, double>>& a,
+                               const std::vector<std::pair<double, double>>& b);
+
+}  // namespace uvpress::eval

@@ -1,0 +1,304 @@
+// Layout extraction, re-baking and the isometric layout for eval (see layout.h).
+#include "layout.h"
+
+#include "atlas/charts.h"
+#include "core/error.h"
+#include "flatten/flatten.h"
+#include "io/asset.h"
+#include "io/image_io.h"
+
+#if __has_include("atlas/rebake.h")
+#include "atlas/rebake.h"
+#define UVPRESS_EVAL_HAVE_REBAKE 1
+#else
+#define UVPRESS_EVAL_HAVE_REBAKE 0
+#endif
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <map>
+#include <numeric>
+#include <set>
+
+namespace uvpress::eval::detail {
+
+namespace {
+
+Image to_rgb(const Image& in) {
+  Image out;
+  out.width = in.width, out.height = in.height, out.channels = 3, out.bits = in.bits;
+  out.pixels.resize(size_t(in.width) * in.height * 3);
+  for (size_t i = 0; i < size_t(in.width) * in.height; ++i)
+    for (uint32_t c = 0; c < 3; ++c)
+      out.pixels[3 * i + c] = in.pixels[i * in.channels + (in.channels >= 3 ? c : 0)];
+  return out;
+}
+
+}  // namespace
+
+double uv_area(const std::vector<float>& uv, const std::vector<uint32_t>& ix, size_t t) {
+  const float* a = &uv[2 * size_t(ix[3 * t])];
+  const float* b = &uv[2 * size_t(ix[3 * t + 1])];
+  const float* c = &uv[2 * size_t(ix[3 * t + 2])];
+  return 0.5 * std::abs((double(b[0]) - a[0]) * (double(c[1]) - a[1]) - (double(c[0]) - a[0]) * (double(b[1]) - a[1]));
+}
+
+double area3d(const std::vector<float>& p, const std::vector<uint32_t>& ix, size_t t) {
+  double e1[3], e2[3];
+  for (int d = 0; d < 3; ++d) {
+    e1[d] = double(p[3 * size_t(ix[3 * t + 1]) + size_t(d)]) - p[3 * size_t(ix[3 * t]) + size_t(d)];
+    e2[d] = double(p[3 * size_t(ix[3 * t + 2]) + size_t(d)]) - p[3 * size_t(ix[3 * t]) + size_t(d)];
+  }
+  const double x = e1[1] * e2[2] - e1[2] * e2[1], y = e1[2] * e2[0] - e1[0] * e2[2], z = e1[0] * e2[1] - e1[1] * e2[0];
+  return 0.5 * std::sqrt(x * x + y * y + z * z);
+}
+
+LayoutMesh extract_layout(const io::GltfFile& file, const std::string& name) {
+  io::Asset asset = io::build_asset(file);
+  // The driving texture: base colour first, then the most triangles sampling it.
+  int best = -1;
+  std::pair<int, size_t> best_score{-1, 0};
+  for (const auto& img : asset.images) {
+    std::set<int> prims;
+    bool color = false;
+    for (const auto& use : img.uses) {
+      const auto& prim = asset.primitives[size_t(use.primitive)];
+      if (size_t(use.tex_coord) >= prim.uv_sets.size()) continue;
+      prims.insert(use.primitive);
+      color = color || use.role == io::TextureRole::BaseColor;
+    }
+    size_t tris = 0;
+    for (int p : prims) tris += asset.primitives[size_t(p)].triangle_count();
+    if (tris == 0) continue;
+    std::pair<int, size_t> score{color ? 1 : 0, tris};
+    if (score > best_score) best_score = score, best = img.index;
+  }
+  if (best < 0) throw InputError(file.path, "no triangle primitive samples a texture: nothing to evaluate");
+  LayoutMesh m;
+  m.name = name, m.file = file.path, m.image = best, m.texture_source = "original";
+  const io::AssetImage* image = nullptr;
+  for (const auto& img : asset.images)
+    if (img.index == best) image = &img;
+  std::set<int> done;
+  for (const auto& use : image->uses) {
+    const auto& prim = asset.primitives[size_t(use.primitive)];
+    if (size_t(use.tex_coord) >= prim.uv_sets.size() || !done.insert(use.primitive).second) continue;
+    if (done.size() == 1) m.repeat = use.wrap_s == 10497 && use.wrap_t == 10497;
+    const uint32_t base = uint32_t(m.positions.size() / 3);
+    m.positions.insert(m.positions.end(), prim.positions.begin(), prim.positions.end());
+    const auto& uv = prim.uv_sets[size_t(use.tex_coord)].uv;
+    for (size_t v = 0; v < prim.vertex_count(); ++v) {
+      auto t = use.transform.present ? use.transform.apply(uv[2 * v], uv[2 * v + 1])
+                                     : std::array<float, 2>{uv[2 * v], uv[2 * v + 1]};
+      m.uvs.push_back(t[0]), m.uvs.push_back(t[1]);
+    }
+    for (uint32_t i : prim.indices) m.indices.push_back(base + i);
+  }
+  m.full = to_rgb(io::decode_image(file.image_bytes.at(size_t(best)), file.path + " image " + std::to_string(best)));
+  for (size_t t = 0; t < m.indices.size() / 3; ++t) m.uv_area += uv_area(m.uvs, m.indices, t), m.area3d += area3d(m.positions, m.indices, t);
+  if (!(m.uv_area > 0)) throw InputError(file.path, "the UVs of the textured primitives have no area");
+  return m;
+}
+
+bool same_triangles(const LayoutMesh& a, const LayoutMesh& b, double tol) {
+  if (a.indices.size() != b.indices.size()) return false;
+  for (size_t k = 0; k < a.indices.size(); ++k)
+    for (int d = 0; d < 3; ++d)
+      if (std::abs(double(a.positions[3 * size_t(a.indices[k]) + size_t(d)]) -
+                   b.positions[3 * size_t(b.indices[k]) + size_t(d)]) > tol)
+        return false;
+  return true;
+}
+
+namespace {
+
+// Plain bake: texel centres inside a new-UV triangle take the bilinear sample of the
+// source at the barycentric old UV; then 16 rounds of dilation fill the gutter.
+[[maybe_unused]] Image simple_bake(const LayoutMesh& ref, const std::vector<float>& old_uv, const std::vector<float>& new_uv,
+                  uint32_t W, uint32_t H) {
+  const Image& src = ref.full;
+  Image out;
+  out.width = W, out.height = H, out.channels = 3, out.bits = src.bits;
+  out.pixels.assign(size_t(W) * H * 3, 0.0f);
+  std::vector<uint8_t> covered(size_t(W) * H, 0);
+  auto sample = [&](double u, double v, float* rgb) {
+    double s = u * src.width - 0.5, t = v * src.height - 0.5;
+    const int w = int(src.width), h = int(src.height);
+    auto fetch = [&](int i, int j, int c) {
+      if (ref.repeat) i = ((i % w) + w) % w, j = ((j % h) + h) % h;
+      else i = std::clamp(i, 0, w - 1), j = std::clamp(j, 0, h - 1);
+      return src.pixels[(size_t(j) * src.width + size_t(i)) * 3 + size_t(c)];
+    };
+    const double fs0 = std::floor(s), ft0 = std::floor(t), fs = s - fs0, ft = t - ft0;
+    for (int c = 0; c < 3; ++c)
+      rgb[c] = float((1 - ft) * ((1 - fs) * fetch(int(fs0), int(ft0), c) + fs * fetch(int(fs0) + 1, int(ft0), c)) +
+                     ft * ((1 - fs) * fetch(int(fs0), int(ft0) + 1, c) + fs * fetch(int(fs0) + 1, int(ft0) + 1, c)));
+  };
+  for (size_t t = 0; t < new_uv.size() / 6; ++t) {
+    double x[3], y[3];
+    for (int k = 0; k < 3; ++k) x[k] = new_uv[6 * t + 2 * size_t(k)] * W, y[k] = new_uv[6 * t + 2 * size_t(k) + 1] * H;
+    const double det = (x[1] - x[0]) * (y[2] - y[0]) - (x[2] - x[0]) * (y[1] - y[0]);
+    if (std::abs(det) < 1e-12) continue;
+    const int i0 = std::max(0, int(std::floor(std::min({x[0], x[1], x[2]})))),
+              i1 = std::min(int(W) - 1, int(std::ceil(std::max({x[0], x[1], x[2]}))));
+    const int j0 = std::max(0, int(std::floor(std::min({y[0], y[1], y[2]})))),
+              j1 = std::min(int(H) - 1, int(std::ceil(std::max({y[0], y[1], y[2]}))));
+    for (int j = j0; j <= j1; ++j)
+      for (int i = i0; i <= i1; ++i) {
+        const double px = i + 0.5, py = j + 0.5;
+        const double b1 = ((px - x[0]) * (y[2] - y[0]) - (x[2] - x[0]) * (py - y[0])) / det;
+        const double b2 = ((x[1] - x[0]) * (py - y[0]) - (px - x[0]) * (y[1] - y[0])) / det;
+        const double b0 = 1 - b1 - b2;
+        if (b0 < -1e-9 || b1 < -1e-9 || b2 < -1e-9) continue;
+        const double u = b0 * old_uv[6 * t] + b1 * old_uv[6 * t + 2] + b2 * old_uv[6 * t + 4];
+        const double v = b0 * old_uv[6 * t + 1] + b1 * old_uv[6 * t + 3] + b2 * old_uv[6 * t + 5];
+        const size_t p = size_t(j) * W + size_t(i);
+        sample(u, v, &out.pixels[3 * p]);
+        covered[p] = 1;
+      }
+  }
+  for (int round = 0; round < 16; ++round) {
+    std::vector<uint8_t> next = covered;
+    for (uint32_t j = 0; j < H; ++j)
+      for (uint32_t i = 0; i < W; ++i) {
+        const size_t p = size_t(j) * W + i;
+        if (covered[p]) continue;
+        float sum[3] = {0, 0, 0};
+        int n = 0;
+        const int di[4] = {-1, 1, 0, 0}, dj[4] = {0, 0, -1, 1};
+        for (int k = 0; k < 4; ++k) {
+          const int a = int(i) + di[k], b = int(j) + dj[k];
+          if (a < 0 || b < 0 || a >= int(W) || b >= int(H) || !covered[size_t(b) * W + size_t(a)]) continue;
+          for (int c = 0; c < 3; ++c) sum[c] += out.pixels[3 * (size_t(b) * W + size_t(a)) + size_t(c)];
+          ++n;
+        }
+        if (!n) continue;
+        for (int c = 0; c < 3; ++c) out.pixels[3 * p + size_t(c)] = sum[c] / float(n);
+        next[p] = 1;
+      }
+    covered.swap(next);
+  }
+  return out;
+}
+
+}  // namespace
+
+Image rebake_from(const LayoutMesh& ref, const LayoutMesh& target, uint32_t W, uint32_t H, std::string* method) {
+  // Corner-expanded UV arrays: triangle t of `target` is triangle t of `ref`.
+  std::vector<float> old_uv(2 * ref.indices.size()), new_uv(2 * ref.indices.size());
+  for (size_t k = 0; k < ref.indices.size(); ++k)
+    for (int d = 0; d < 2; ++d)
+      old_uv[2 * k + size_t(d)] = ref.uvs[2 * size_t(ref.indices[k]) + size_t(d)],
+      new_uv[2 * k + size_t(d)] = target.uvs[2 * size_t(target.indices[k]) + size_t(d)];
+#if UVPRESS_EVAL_HAVE_REBAKE
+  std::vector<uint32_t> corners(ref.indices.size());
+  std::iota(corners.begin(), corners.end(), 0u);
+  atlas::RebakeMesh mesh;
+  mesh.indices = corners.data(), mesh.index_count = corners.size();
+  mesh.old_uv = old_uv.data(), mesh.new_uv = new_uv.data(), mesh.vertex_count = corners.size();
+  atlas::RebakeOptions o;
+  o.width = W, o.height = H;
+  o.role = atlas::RebakeRole::Color;
+  o.wrap_s = o.wrap_t = ref.repeat ? atlas::kWrapRepeat : atlas::kWrapClampToEdge;
+  if (method) *method = "atlas::rebake";
+  return atlas::rebake(ref.full, {mesh}, o);
+#else
+  if (method) *method = "bilinear bake, dilated gutter";
+  return simple_bake(ref, old_uv, new_uv, W, H);
+#endif
+}
+
+std::vector<float> isometric_uvs(const LayoutMesh& ref, double* aspect, nlohmann::ordered_json* info) {
+  const auto t0 = std::chrono::steady_clock::now();
+  Mesh welded = atlas::weld_uv_mesh(ref.positions.data(), ref.uvs.data(), ref.positions.size() / 3, ref.indices.data(),
+                                    ref.indices.size());
+  atlas::Charts charts = atlas::find_charts(welded);
+  const size_t nt = welded.triangle_count();
+  std::vector<double> uv(2 * welded.uv_count(), 0.0);  // per welded UV vertex, 3-D area scale
+  struct Box {
+    double lo[2] = {1e300, 1e300}, hi[2] = {-1e300, -1e300}, x = 0, y = 0;
+  };
+  std::vector<Box> boxes(charts.count);
+  std::vector<std::vector<uint32_t>> members(charts.count);  // welded UV vertices per chart
+  size_t flattened = 0, kept = 0;
+  for (uint32_t c = 0; c < charts.count; ++c) {
+    Mesh chart;
+    std::vector<uint32_t> local(welded.uv_count(), UINT32_MAX), back;
+    double a3 = 0, a2 = 0;
+    for (size_t t = 0; t < nt; ++t) {
+      if (charts.chart_of_triangle[t] != c) continue;
+      for (int k = 0; k < 3; ++k) {
+        const uint32_t u = welded.uv_triangles[3 * t + size_t(k)];
+        if (local[u] == UINT32_MAX) {
+          local[u] = uint32_t(back.size());
+          back.push_back(u);
+          const uint32_t pv = welded.triangles[3 * t + size_t(k)];
+          for (int d = 0; d < 3; ++d) chart.positions.push_back(welded.positions[3 * size_t(pv) + size_t(d)]);
+        }
+        chart.triangles.push_back(local[u]);
+      }
+      a3 += area3d(ref.positions, ref.indices, t);
+      a2 += uv_area(ref.uvs, ref.indices, t);
+    }
+    std::vector<double> cuv;
+    try {
+      flatten::Options o;
+      o.max_iterations = 300;
+      auto r = flatten::flatten(chart, o);
+      if (r.flips) throw flatten::FlattenError("flips");
+      cuv = r.uv;
+      ++flattened;
+    } catch (const flatten::FlattenError&) {
+      // Not a disk (or unusable): the input UVs at the 3-D area scale.
+      const double s = a2 > 0 ? std::sqrt(a3 / a2) : 1.0;
+      cuv.resize(2 * back.size());
+      for (size_t i = 0; i < back.size(); ++i)
+        cuv[2 * i] = welded.uvs[2 * size_t(back[i])] * s, cuv[2 * i + 1] = welded.uvs[2 * size_t(back[i]) + 1] * s;
+      ++kept;
+    }
+    for (size_t i = 0; i < back.size(); ++i) {
+      uv[2 * size_t(back[i])] = cuv[2 * i], uv[2 * size_t(back[i]) + 1] = cuv[2 * i + 1];
+      for (int d = 0; d < 2; ++d)
+        boxes[c].lo[d] = std::min(boxes[c].lo[d], cuv[2 * i + size_t(d)]),
+        boxes[c].hi[d] = std::max(boxes[c].hi[d], cuv[2 * i + size_t(d)]);
+    }
+    members[c] = std::move(back);
+  }
+  // Shelves, tallest charts first, at one scale; a gutter of 1% of sqrt(area).
+  double total = 0, widest = 0;
+  for (const auto& b : boxes) total += (b.hi[0] - b.lo[0]) * (b.hi[1] - b.lo[1]), widest = std::max(widest, b.hi[0] - b.lo[0]);
+  std::vector<uint32_t> order(charts.count);
+  std::iota(order.begin(), order.end(), 0u);
+  std::stable_sort(order.begin(), order.end(),
+                   [&](uint32_t a, uint32_t b) { return boxes[a].hi[1] - boxes[a].lo[1] > boxes[b].hi[1] - boxes[b].lo[1]; });
+  const double width = std::max(widest, std::sqrt(total) * 1.1), gutter = 0.01 * std::sqrt(total);
+  double x = gutter, y = gutter, row = 0, used_w = 0;
+  for (uint32_t c : order) {
+    Box& b = boxes[c];
+    const double w = b.hi[0] - b.lo[0], h = b.hi[1] - b.lo[1];
+    if (x > gutter && x + w > width) x = gutter, y += row + gutter, row = 0;
+    b.x = x, b.y = y;
+    x += w + gutter, row = std::max(row, h), used_w = std::max(used_w, x);
+  }
+  const double used_h = y + row + gutter;
+  for (uint32_t c = 0; c < charts.count; ++c)
+    for (uint32_t u : members[c]) {
+      uv[2 * size_t(u)] = (uv[2 * size_t(u)] - boxes[c].lo[0] + boxes[c].x) / used_w;
+      uv[2 * size_t(u) + 1] = (uv[2 * size_t(u) + 1] - boxes[c].lo[1] + boxes[c].y) / used_h;
+    }
+  *aspect = used_w / used_h;
+  // Back to the layout's vertices (a vertex's welded UV vertex is the same in every corner).
+  std::vector<float> out(ref.uvs.size(), 0.0f);
+  for (size_t k = 0; k < ref.indices.size(); ++k)
+    for (int d = 0; d < 2; ++d)
+      out[2 * size_t(ref.indices[k]) + size_t(d)] = float(uv[2 * size_t(welded.uv_triangles[k]) + size_t(d)]);
+  if (info)
+    *info = {{"charts", charts.count},
+             {"flattened", flattened},
+             {"kept_input_uvs", kept},
+             {"seconds", std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count()}};
+  return out;
+}
+
+}  // namespace uvpress::eval::detail

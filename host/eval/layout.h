@@ -1,0 +1,50 @@
+// Internal to host/eval: one layout as eval renders it (primitives sampling the driving
+// texture, concatenated), texture re-baking and the isometric layout.
+#pragma once
+
+#include "core/image.h"
+#include "io/gltf_io.h"
+
+#include <nlohmann/json.hpp>
+
+#include <string>
+#include <vector>
+
+namespace uvpress::eval::detail {
+
+struct LayoutMesh {
+  std::string name, file;
+  std::string texture_source;  // "original", "rebaked", "own"
+  std::vector<float> positions;  // x y z per vertex
+  std::vector<uint32_t> indices;  // 3 per triangle
+  std::vector<float> uvs;        // u v per vertex, KHR_texture_transform applied
+  Image full;                    // RGB, the layout's full texture
+  bool repeat = true;            // the sampler wraps (REPEAT) rather than clamps
+  int image = -1;                // glTF image index of the driving texture
+  double uv_area = 0;            // sum |uv triangle area|, unit square
+  double area3d = 0;             // sum |triangle area|
+};
+
+// The driving texture (the base colour image sampled by the most triangles, else any
+// sampled image) and every triangle primitive that samples it. Throws InputError.
+LayoutMesh extract_layout(const io::GltfFile& file, const std::string& name);
+
+// Per triangle uv area and 3-D area.
+double uv_area(const std::vector<float>& uvs, const std::vector<uint32_t>& indices, size_t t);
+double area3d(const std::vector<float>& positions, const std::vector<uint32_t>& indices, size_t t);
+
+// True when `b` has the same triangles as `a` in the same order (corner positions within
+// `tolerance`).
+bool same_triangles(const LayoutMesh& a, const LayoutMesh& b, double tolerance);
+
+// The reference texture re-baked into `target`'s UVs (triangles corresponding one to one
+// with `reference`'s) at width x height. Uses atlas::rebake when the tree has it.
+Image rebake_from(const LayoutMesh& reference, const LayoutMesh& target, uint32_t width, uint32_t height,
+                  std::string* method = nullptr);
+
+// The isometric layout of `reference` (see eval.h): new UVs per vertex in [0,1] and the
+// aspect (width / height) its texture should have. `info` gets charts, flattened charts,
+// kept charts, seconds.
+std::vector<float> isometric_uvs(const LayoutMesh& reference, double* aspect, nlohmann::ordered_json* info);
+
+}  // namespace uvpress::eval::detail

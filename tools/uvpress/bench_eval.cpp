@@ -1,0 +1,55 @@
+// uvpress bench eval: seconds for a full q-c curve (the input layout, the default c_r grid,
+// 20 views) on Duck (or --asset) on every backend, one JSON line per backend.
+#include "bench.h"
+
+#include "core/error.h"
+#include "eval/eval.h"
+#include "io/gltf_io.h"
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+
+namespace uvpress::cli {
+
+void add_bench_eval(CLI::App& bench, Globals& g) {
+  auto* cmd = bench.add_subcommand("eval", "Seconds for a full eval curve (20 views, default c_r grid) per backend");
+  auto asset = std::make_shared<std::string>("../shared/assets/Duck/glTF-Binary/Duck.glb");
+  auto resolution = std::make_shared<uint32_t>(512);
+  cmd->add_option("--asset", *asset, "glTF asset")->capture_default_str();
+  cmd->add_option("--resolution", *resolution, "View images, pixels a side")->capture_default_str()->check(CLI::Range(8u, 1024u));
+  cmd->callback([&g, asset, resolution] {
+    g.action = [&g, asset, resolution] {
+      if (!std::filesystem::exists(*asset)) throw InputError(*asset, "file not found (give --asset PATH)");
+      io::GltfFile file = io::load_gltf(*asset);
+      eval::EvalOptions o;
+      o.resolution = *resolution;
+      o.artifacts = false;
+      for (auto& b : available_backends(g)) {
+        const auto t0 = std::chrono::steady_clock::now();
+        auto report = eval::evaluate(file, {}, *b.engine, o);
+        const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        const auto d = b.engine->device();
+        nlohmann::ordered_json line = {{"bench", "eval"},
+                                       {"backend", d.backend},
+                                       {"device", d.name},
+                                       {"device_type", d.type},
+                                       {"threads", d.threads},
+                                       {"asset", *asset},
+                                       {"triangles", report["triangles"]},
+                                       {"views", report["views"]},
+                                       {"resolution", *resolution},
+                                       {"c_r_points", o.cost_grid.size()},
+                                       {"seconds", s},
+                                       {"render_s", report["seconds"]["render"]},
+                                       {"gmsd_s", report["seconds"]["gmsd"]},
+                                       {"textures_s", report["seconds"]["textures"]}};
+        std::printf("%s\n", line.dump().c_str());
+        std::fflush(stdout);
+      }
+      return 0;
+    };
+  });
+}
+
+}  // namespace uvpress::cli

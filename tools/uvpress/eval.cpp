@@ -1,0 +1,87 @@
+// uvpress eval REFERENCE [OTHER ...] [--flatten] [--cost-grid ...] [--resolution N]
+//   [--report FILE.json] [--html DIR]: perceptual quality against pixel cost over 20
+// dodecahedron views (seed paper 001, section 5.1) for the reference's layout, each other
+// glTF of the same mesh, and the isometric (flatten) layout; see host/eval/eval.h.
+#include "cli.h"
+
+#include "core/error.h"
+#include "eval/eval.h"
+#include "io/gltf_io.h"
+
+#include <cstdio>
+#include <filesystem>
+#include <unistd.h>
+
+namespace uvpress::cli {
+
+void add_eval(CLI::App& app, Globals& g) {
+  auto* cmd = app.add_subcommand("eval", "Quality (mean GMSD over 20 views) against pixel cost for several UV layouts");
+  struct Args {
+    std::string reference;
+    std::vector<std::string> others;
+    bool flatten = false;
+    std::vector<double> grid;
+    uint32_t resolution = 512;
+    double contact = 0;
+    std::string html;
+  };
+  auto a = std::make_shared<Args>();
+  cmd->add_option("reference", a->reference, "The input asset (.gltf/.glb): its layout and full texture are the reference")
+      ->required();
+  cmd->add_option("others", a->others, "Other glTF files of the same mesh (reparam output, xatlas, Blender ...)");
+  cmd->add_flag("--flatten", a->flatten, "Also evaluate the isometric layout (charts flattened, packed, re-baked)");
+  cmd->add_option("--cost-grid", a->grid, "Relative costs c_r, comma-separated (default 0.1,0.2,...,1.0)")
+      ->delimiter(',');
+  cmd->add_option("--resolution", a->resolution, "View images, pixels a side")->capture_default_str()->check(CLI::Range(8u, 1024u));
+  cmd->add_option("--contact-cost", a->contact, "c_r of the contact sheet (default: the grid point nearest 0.25)");
+  cmd->add_option("--html", a->html, "Write an offline HTML report into this folder");
+  cmd->callback([&g, a] {
+    g.action = [&g, a] {
+      auto t0 = std::chrono::steady_clock::now();
+      io::GltfFile ref = io::load_gltf(a->reference);
+      std::vector<io::GltfFile> files;
+      files.reserve(a->others.size());
+      for (const auto& f : a->others) files.push_back(io::load_gltf(f));
+      std::vector<eval::LayoutInput> others;
+      for (size_t k = 0; k < files.size(); ++k) {
+        std::string name = std::filesystem::path(a->others[k]).stem().string();
+        for (const auto& o : others)
+          if (o.name == name) name += "-" + std::to_string(k + 1);
+        if (name == "input" || name == "flatten") name += "-file";
+        others.push_back({name, &files[k]});
+      }
+      g.stage("load", t0);
+      auto engine = g.make_engine();
+      eval::EvalOptions o;
+      if (!a->grid.empty()) o.cost_grid = a->grid;
+      o.resolution = a->resolution;
+      o.flatten = a->flatten;
+      o.contact_cost = a->contact;
+      o.artifacts = !a->html.empty();
+      const bool tty = isatty(2);
+      eval::EvalArtifacts art;
+      auto report = eval::evaluate(ref, others, *engine, o, &art, [&](const std::string& stage, size_t done, size_t total) {
+        if (tty) std::fprintf(stderr, "\r%-40s %zu/%zu", stage.c_str(), done, total);
+        if (tty && stage == "done") std::fprintf(stderr, "\n");
+      });
+      g.stage("evaluate", t0);
+      if (!a->html.empty()) eval::write_html_report(report, art, a->html);
+      g.write_report(report);
+      g.stage("write", t0);
+      std::string summary;
+      for (const auto& s : report["savings"])
+        if (!s["pixel_ratio_at_equal_q"].is_null()) {
+          char buf[160];
+          std::snprintf(buf, sizeof buf, "; %s vs %s: %.1f%% of the pixels at equal q", s["layout"].get<std::string>().c_str(),
+                        s["vs"].get<std::string>().c_str(), 100 * s["pixel_ratio_at_equal_q"].get<double>());
+          summary += buf;
+        }
+      std::printf("eval: %zu layouts x %zu costs, %d views at %u px in %.1f s%s\n", report["layouts"].size(),
+                  o.cost_grid.size(), report["views"].get<int>(), o.resolution, report["seconds"]["total"].get<double>(),
+                  summary.c_str());
+      return 0;
+    };
+  });
+}
+
+}  // namespace uvpress::cli
