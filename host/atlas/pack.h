@@ -1,0 +1,125 @@
+// Packing charts into a texture atlas, and choosing the atlas size from a pixel budget.
+//
+// Only translations and 90-degree rotations are used: any other rotation would undo the
+// orientation that the mesh stage optimized. The packer is a raster "Tetris" packer on
+// each chart's rasterized footprint (as in LSCM's packer [LPRM02], which the perceptual
+// loss paper uses): a per-column horizon of occupied texels, each chart dropped onto it at
+// the column offset and rotation (0 or 90 degrees) that adds the least area (growth of the
+// used height + holes left between the horizon and the chart's lower profile). It packs
+// actual footprints, not bounding boxes, so L-shaped and diagonal charts interlock along
+// the horizon; holes under overhangs are not refilled.
+//
+// Coordinates: atlas texel space, x to the right, y down (image rows, as glTF v), texel
+// (i, j) covers [i, i+1) x [j, j+1). A chart's footprint is every texel whose square
+// overlaps one of its triangles with positive area (conservative rasterization). Between
+// the footprints of any two charts there are at least `gutter` empty texels (Chebyshev
+// distance, i.e. also diagonally), and `gutter` empty texels between footprints and the
+// image edge. With `block` = b > 1 (4 for BCn), packing happens on b x b cells: footprints
+// are sets of whole cells, chart origins sit on multiples of b, chart extents are whole
+// cells, the gutter is rounded up to whole cells, and no b x b block holds texels of two
+// charts. Everything is deterministic (OpenMP only evaluates candidate positions; the
+// choice is a fixed-order scan).
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+namespace uvpress::atlas {
+
+// One chart to pack: a 2-D triangle mesh in texel units of the source density (scale 1
+// means one unit = one atlas texel), at any position.
+struct ChartShape {
+  std::vector<double> points;       // x y per vertex
+  std::vector<uint32_t> triangles;  // 3 indices per triangle
+};
+
+struct PackOptions {
+  uint32_t gutter = 4;  // empty texels between charts and at the image edge
+  uint32_t block = 1;   // 1, or 4 for BCn block alignment
+  bool rotate = true;   // allow 90-degree rotations
+};
+
+// Where one chart goes: atlas = R_k (scale * p) + t, with R_0 = identity and
+// R_1 (x, y) = (-y, x) (in the y-down image a clockwise quarter turn).
+struct ChartPlacement {
+  uint32_t rotation = 0;  // k in {0, 1}
+  double tx = 0, ty = 0;
+  // Texel cell of the footprint's bounding box corner and its size in texels (multiples of
+  // the block size).
+  uint32_t x = 0, y = 0, width = 0, height = 0;
+};
+
+struct Packing {
+  bool ok = false;
+  uint32_t width = 0, height = 0;  // atlas size in texels
+  double scale = 1;                // uniform scale applied to every chart
+  std::vector<ChartPlacement> placements;  // one per chart, in input order
+  double chart_area = 0;     // sum of |triangle areas| after scaling, texels^2
+  double efficiency = 0;     // chart_area / (width * height)
+  uint32_t used_height = 0;  // rows down to the lowest footprint texel + gutter
+
+  // Chart point (input units) -> atlas texel coordinates.
+  std::array<double, 2> map(size_t chart, double x, double y) const;
+  // ... -> atlas UV in [0,1] (glTF convention, v down).
+  std::array<double, 2> map_uv(size_t chart, double x, double y) const;
+};
+
+// (a) Packs the charts at `scale` into width x height. ok = false when they don't fit.
+Packing pack_charts(const std::vector<ChartShape>& charts, uint32_t width, uint32_t height, double scale = 1.0,
+                    const PackOptions& options = {});
+
+// (b) The largest scale s <= s_max at which pack_charts succeeds, by bisection to relative
+// tolerance `tolerance` (a scale s (1 + tolerance) failed, or s == s_max). The heuristic
+// packer is not strictly monotone in s, so "largest" is local: s fits, s (1 + tolerance)
+// does not. ok = false when nothing fits even at scale 1e-6 (too many charts for the
+// gutters).
+Packing pack_max_scale(const std::vector<ChartShape>& charts, uint32_t width, uint32_t height,
+                       const PackOptions& options = {}, double s_max = 1.0, double tolerance = 1e-4);
+
+// (c) Atlas size from a budget.
+enum class CostMeasure {
+  ChartTexels,  // eq. 20-21: c = r^2 sum|triangle uv area|, i.e. texels under the charts
+  ImageTexels,  // texels of the whole image (memory / file size)
+};
+
+struct BudgetOptions {
+  double cost = 0.5;    // target relative cost c_r (used when size == 0)
+  CostMeasure measure = CostMeasure::ChartTexels;
+  uint32_t size = 0;    // --size N: the atlas's longer side is N (the budget is ignored)
+  bool pot = false;     // power-of-two sides
+  bool keep_aspect = true;  // the source's aspect ratio, else square
+  double s_max = 1.0;   // never above the source texel density
+  PackOptions pack;
+};
+
+struct AtlasChoice {
+  Packing packing;        // size, scale, placements, efficiency
+  double cost_ratio = 0;  // achieved c_r = scale^2 * chart area / old_used_texels (eq. 21)
+  double texel_ratio = 0; // width * height / (old_width * old_height)
+};
+
+// Picks width x height and the scale for the charts (given at the source texel density:
+// scale 1 = one unit per source texel). old_used_texels is c of the input layout (eq. 20:
+// the source texels under the input's charts); only ChartTexels needs it, but cost_ratio
+// is reported from it when > 0.
+//  - size > 0: longer side = size (rounded to a power of two with pot), shorter side by the
+//    source aspect; the scale is the largest that fits (<= s_max).
+//  - ChartTexels: scale = min(s_max, sqrt(cost * old_used / chart area)), then the smallest
+//    atlas of the source aspect that holds the charts at that scale; with pot, the
+//    power-of-two size nearest (in log area) to that atlas, and the scale is then re-fitted
+//    to it (so c_r is only approximate with pot).
+//  - ImageTexels: width * height ~= cost * old_width * old_height, then the largest scale;
+//    when that scale reaches s_max the atlas shrinks to the smallest that still fits.
+// Sides are multiples of the block size. ok = false when nothing fits.
+AtlasChoice choose_atlas(const std::vector<ChartShape>& charts, uint32_t old_width, uint32_t old_height,
+                         double old_used_texels, const BudgetOptions& options = {});
+
+// Whether triangle (a, b, c) overlaps the box [x0,x1] x [y0,y1] by more than eps (touching
+// along an edge or at a corner does not count). Exact separating-axis test; eps is a
+// distance in the same units.
+bool triangle_overlaps_box(const double a[2], const double b[2], const double c[2], double x0, double y0, double x1,
+                           double y1, double eps = 1e-9);
+
+}  // namespace uvpress::atlas

@@ -1,0 +1,416 @@
+#include "atlas/rebake.h"
+
+#include "atlas/pack.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+namespace uvpress::atlas {
+
+float srgb_to_linear(float v) {
+  v = std::clamp(v, 0.0f, 1.0f);
+  return v <= 0.04045f ? v / 12.92f : std::pow((v + 0.055f) / 1.055f, 2.4f);
+}
+
+float linear_to_srgb(float v) {
+  v = std::clamp(v, 0.0f, 1.0f);
+  return v <= 0.0031308f ? v * 12.92f : 1.055f * std::pow(v, 1.0f / 2.4f) - 0.055f;
+}
+
+namespace {
+
+// Exact for 8- and 16-bit values (k/255 = 257k/65535).
+const std::vector<float>& srgb_table() {
+  static const std::vector<float> table = [] {
+    std::vector<float> t(65536);
+    for (int i = 0; i < 65536; ++i) t[i] = srgb_to_linear(float(double(i) / 65535.0));
+    return t;
+  }();
+  return table;
+}
+
+int wrap(int i, int n, int mode) {
+  if (mode == kWrapClampToEdge) return std::clamp(i, 0, n - 1);
+  if (mode == kWrapMirroredRepeat) {
+    int m = i % (2 * n);
+    if (m < 0) m += 2 * n;
+    return m < n ? m : 2 * n - 1 - m;
+  }
+  int m = i % n;  // REPEAT (and anything unknown)
+  return m < 0 ? m + n : m;
+}
+
+struct Tri {
+  double n[3][2];     // new texel coordinates
+  double o0[2];       // old texel coordinates of vertex 0
+  double J[2][2];     // d old / d new (texel units)
+  float Q[2][2];      // normal xy rotation old -> new, in y-up components
+  double lo[2], hi[2];  // bounding box (new texels)
+  double sign;        // orientation of the new triangle
+  int ns[2];          // samples per axis
+};
+
+// Closest point of triangle t to p (p itself when inside); returns the squared distance.
+double closest_point(const Tri& t, double px, double py, double& qx, double& qy) {
+  bool inside = true;
+  for (int e = 0; e < 3; ++e) {
+    const double* a = t.n[e];
+    const double* b = t.n[(e + 1) % 3];
+    const double ef = ((b[0] - a[0]) * (py - a[1]) - (b[1] - a[1]) * (px - a[0])) * t.sign;
+    if (ef < 0) {
+      inside = false;
+      break;
+    }
+  }
+  if (inside) {
+    qx = px, qy = py;
+    return 0;
+  }
+  double best = std::numeric_limits<double>::infinity();
+  for (int e = 0; e < 3; ++e) {
+    const double* a = t.n[e];
+    const double* b = t.n[(e + 1) % 3];
+    const double dx = b[0] - a[0], dy = b[1] - a[1];
+    const double len2 = dx * dx + dy * dy;
+    double s = len2 > 0 ? ((px - a[0]) * dx + (py - a[1]) * dy) / len2 : 0;
+    s = std::clamp(s, 0.0, 1.0);
+    const double cx = a[0] + s * dx, cy = a[1] + s * dy;
+    const double d = (px - cx) * (px - cx) + (py - cy) * (py - cy);
+    if (d < best) best = d, qx = cx, qy = cy;
+  }
+  return best;
+}
+
+// Orthogonal polar factor of a 2x2 matrix (rotation, or reflection when det < 0).
+void polar_factor(const double M[2][2], float Q[2][2]) {
+  const double a = M[0][0], b = M[0][1], c = M[1][0], d = M[1][1];
+  if (a * d - b * c >= 0) {
+    const double th = std::atan2(c - b, a + d);
+    Q[0][0] = float(std::cos(th)), Q[0][1] = float(-std::sin(th));
+    Q[1][0] = float(std::sin(th)), Q[1][1] = float(std::cos(th));
+  } else {
+    const double ph = std::atan2(c + b, a - d);
+    Q[0][0] = float(std::cos(ph)), Q[0][1] = float(std::sin(ph));
+    Q[1][0] = float(std::sin(ph)), Q[1][1] = float(-std::cos(ph));
+  }
+}
+
+// Nearest covered texel for every texel (exact squared Euclidean distance transform,
+// Felzenszwalb & Huttenlocher): columns, then the lower envelope of parabolas per row.
+std::vector<int64_t> nearest_covered(const std::vector<uint8_t>& covered, int W, int H) {
+  std::vector<int32_t> col(size_t(W) * H, -1);  // nearest covered row in the same column
+#pragma omp parallel for schedule(static)
+  for (int x = 0; x < W; ++x) {
+    int last = -1;
+    for (int y = 0; y < H; ++y) {
+      if (covered[size_t(y) * W + x]) last = y;
+      col[size_t(y) * W + x] = last;
+    }
+    last = -1;
+    for (int y = H - 1; y >= 0; --y) {
+      if (covered[size_t(y) * W + x]) last = y;
+      int32_t& c = col[size_t(y) * W + x];
+      if (last >= 0 && (c < 0 || last - y < y - c)) c = last;
+    }
+  }
+  std::vector<int64_t> nearest(size_t(W) * H, -1);
+#pragma omp parallel
+  {
+    std::vector<int> v(W);
+    std::vector<double> z(W + 1);
+#pragma omp for schedule(static)
+    for (int y = 0; y < H; ++y) {
+      auto h = [&](int q) {
+        const double d = double(y - col[size_t(y) * W + q]);
+        return d * d;
+      };
+      int k = -1;
+      for (int q = 0; q < W; ++q) {
+        if (col[size_t(y) * W + q] < 0) continue;
+        const double fq = h(q) + double(q) * q;
+        double s = 0;
+        while (k >= 0) {
+          const int p = v[k];
+          s = (fq - (h(p) + double(p) * p)) / (2.0 * (q - p));
+          if (s <= z[k]) {
+            --k;
+          } else {
+            break;
+          }
+        }
+        ++k;
+        v[k] = q;
+        z[k] = k == 0 ? -std::numeric_limits<double>::infinity() : s;
+        z[k + 1] = std::numeric_limits<double>::infinity();
+      }
+      if (k < 0) continue;
+      int j = 0;
+      for (int x = 0; x < W; ++x) {
+        while (z[j + 1] < x) ++j;
+        const int q = v[j];
+        nearest[size_t(y) * W + x] = int64_t(col[size_t(y) * W + q]) * W + q;
+      }
+    }
+  }
+  return nearest;
+}
+
+}  // namespace
+
+Image rebake(const Image& source, const std::vector<RebakeMesh>& meshes, const RebakeOptions& opt,
+             RebakeStats* stats) {
+  if (source.width == 0 || source.height == 0 || source.channels == 0 ||
+      source.pixels.size() != size_t(source.width) * source.height * source.channels)
+    throw std::invalid_argument("rebake: empty or inconsistent source image");
+  if (opt.width == 0 || opt.height == 0) throw std::invalid_argument("rebake: zero output size");
+  const int W = int(opt.width), H = int(opt.height);
+  const int SW = int(source.width), SH = int(source.height);
+  const int C = int(source.channels);
+  const bool has_alpha = C == 2 || C == 4;
+  const int alpha = has_alpha ? C - 1 : -1;
+  const int colour_channels = has_alpha ? C - 1 : C;
+  const bool colour = opt.role == RebakeRole::Color;
+  const bool linear = colour && opt.linear_light;
+  const bool premultiply = colour && has_alpha;
+  const bool normal = opt.role == RebakeRole::Normal && C >= 2;
+
+  // The working copy of the source: linear light and/or premultiplied for colour.
+  std::vector<float> work;
+  const float* src = source.pixels.data();
+  if (linear || premultiply) {
+    work.resize(source.pixels.size());
+    const auto& table = srgb_table();
+    const size_t n = size_t(SW) * SH;
+#pragma omp parallel for schedule(static)
+    for (int64_t i = 0; i < int64_t(n); ++i) {
+      const float* p = &source.pixels[size_t(i) * C];
+      float* q = &work[size_t(i) * C];
+      const float a = has_alpha ? p[alpha] : 1.0f;
+      for (int c = 0; c < colour_channels; ++c) {
+        float v = p[c];
+        if (linear) v = table[size_t(std::lround(std::clamp(v, 0.0f, 1.0f) * 65535.0f))];
+        q[c] = premultiply ? v * a : v;
+      }
+      if (has_alpha) q[alpha] = a;
+    }
+    src = work.data();
+  }
+
+  // Triangles in texel units.
+  std::vector<Tri> tris;
+  for (const RebakeMesh& m : meshes) {
+    if (!m.indices || !m.old_uv || !m.new_uv) continue;
+    for (size_t t = 0; t + 2 < m.index_count; t += 3) {
+      const uint32_t id[3] = {m.indices[t], m.indices[t + 1], m.indices[t + 2]};
+      if (id[0] >= m.vertex_count || id[1] >= m.vertex_count || id[2] >= m.vertex_count) continue;
+      Tri tr;
+      double o[3][2];
+      bool finite = true;
+      for (int k = 0; k < 3; ++k) {
+        tr.n[k][0] = double(m.new_uv[2 * id[k]]) * W;
+        tr.n[k][1] = double(m.new_uv[2 * id[k] + 1]) * H;
+        o[k][0] = double(m.old_uv[2 * id[k]]) * SW;
+        o[k][1] = double(m.old_uv[2 * id[k] + 1]) * SH;
+        finite = finite && std::isfinite(tr.n[k][0]) && std::isfinite(tr.n[k][1]) && std::isfinite(o[k][0]) &&
+                 std::isfinite(o[k][1]);
+      }
+      if (!finite) continue;
+      const double e1x = tr.n[1][0] - tr.n[0][0], e1y = tr.n[1][1] - tr.n[0][1];
+      const double e2x = tr.n[2][0] - tr.n[0][0], e2y = tr.n[2][1] - tr.n[0][1];
+      const double det = e1x * e2y - e2x * e1y;
+      if (std::abs(det) < 1e-12) continue;
+      tr.sign = det > 0 ? 1 : -1;
+      // J = [o1-o0, o2-o0] [n1-n0, n2-n0]^-1
+      const double f1x = o[1][0] - o[0][0], f1y = o[1][1] - o[0][1];
+      const double f2x = o[2][0] - o[0][0], f2y = o[2][1] - o[0][1];
+      const double inv[2][2] = {{e2y / det, -e2x / det}, {-e1y / det, e1x / det}};
+      tr.J[0][0] = f1x * inv[0][0] + f2x * inv[1][0];
+      tr.J[0][1] = f1x * inv[0][1] + f2x * inv[1][1];
+      tr.J[1][0] = f1y * inv[0][0] + f2y * inv[1][0];
+      tr.J[1][1] = f1y * inv[0][1] + f2y * inv[1][1];
+      tr.o0[0] = o[0][0], tr.o0[1] = o[0][1];
+      for (int a = 0; a < 2; ++a) {
+        const double len = std::hypot(tr.J[0][a], tr.J[1][a]);
+        tr.ns[a] = int(std::clamp(std::ceil(len - 1e-6), 1.0, double(std::max<uint32_t>(1, opt.max_samples))));
+      }
+      // Normal rotation: polar factor of K = J^-1 (old -> new) in y-up components, S K S.
+      const double dj = tr.J[0][0] * tr.J[1][1] - tr.J[0][1] * tr.J[1][0];
+      if (dj != 0) {
+        const double K[2][2] = {{tr.J[1][1] / dj, tr.J[0][1] / dj}, {tr.J[1][0] / dj, tr.J[0][0] / dj}};
+        // S K S with S = diag(1,-1), K = [[J11, -J01], [-J10, J00]] / det: signs folded above.
+        polar_factor(K, tr.Q);
+      } else {
+        tr.Q[0][0] = tr.Q[1][1] = 1, tr.Q[0][1] = tr.Q[1][0] = 0;
+      }
+      for (int a = 0; a < 2; ++a) {
+        tr.lo[a] = std::min({tr.n[0][a], tr.n[1][a], tr.n[2][a]});
+        tr.hi[a] = std::max({tr.n[0][a], tr.n[1][a], tr.n[2][a]});
+      }
+      tris.push_back(tr);
+    }
+  }
+
+  // Bin triangles into tiles (CSR, triangle order kept).
+  constexpr int T = 16;
+  const int tx = (W + T - 1) / T, ty = (H + T - 1) / T;
+  auto tile_range = [&](const Tri& t, int& x0, int& x1, int& y0, int& y1) {
+    x0 = std::max(0, int(std::floor(t.lo[0])) / T);
+    x1 = std::min(tx - 1, int(std::min<double>(W - 1, std::ceil(t.hi[0]))) / T);
+    y0 = std::max(0, int(std::floor(t.lo[1])) / T);
+    y1 = std::min(ty - 1, int(std::min<double>(H - 1, std::ceil(t.hi[1]))) / T);
+    return t.hi[0] > 0 && t.hi[1] > 0 && t.lo[0] < W && t.lo[1] < H;
+  };
+  std::vector<uint32_t> start(size_t(tx) * ty + 1, 0);
+  for (const Tri& t : tris) {
+    int x0, x1, y0, y1;
+    if (!tile_range(t, x0, x1, y0, y1)) continue;
+    for (int y = y0; y <= y1; ++y)
+      for (int x = x0; x <= x1; ++x) ++start[size_t(y) * tx + x + 1];
+  }
+  for (size_t i = 1; i < start.size(); ++i) start[i] += start[i - 1];
+  std::vector<uint32_t> list(start.back());
+  {
+    std::vector<uint32_t> fill(start.begin(), start.end() - 1);
+    for (uint32_t i = 0; i < tris.size(); ++i) {
+      int x0, x1, y0, y1;
+      if (!tile_range(tris[i], x0, x1, y0, y1)) continue;
+      for (int y = y0; y <= y1; ++y)
+        for (int x = x0; x <= x1; ++x) list[fill[size_t(y) * tx + x]++] = i;
+    }
+  }
+
+  // UVs are floats: an edge meant to lie on a texel line may miss it by an ulp of the
+  // texel coordinate. Overlaps thinner than that do not claim a texel.
+  const double eps = 4.0 * std::numeric_limits<float>::epsilon() * std::max(W, H);
+
+  Image out;
+  out.width = opt.width, out.height = opt.height, out.channels = source.channels, out.bits = source.bits;
+  out.pixels.assign(size_t(W) * H * C, 0.0f);
+  std::vector<uint8_t> covered(size_t(W) * H, 0);
+
+#pragma omp parallel
+  {
+    std::vector<double> acc(C), straight(C);
+#pragma omp for schedule(static)
+    for (int tile = 0; tile < tx * ty; ++tile) {
+      const int bx = (tile % tx) * T, by = (tile / tx) * T;
+      const uint32_t* first = list.data() + start[tile];
+      const uint32_t* last = list.data() + start[tile + 1];
+      if (first == last) continue;
+      for (int y = by; y < std::min(H, by + T); ++y)
+        for (int x = bx; x < std::min(W, bx + T); ++x) {
+          const double cx = x + 0.5, cy = y + 0.5;
+          const double box0[2] = {double(x), double(y)};
+          double best = std::numeric_limits<double>::infinity();
+          const Tri* owner = nullptr;
+          for (const uint32_t* it = first; it != last; ++it) {
+            const Tri& t = tris[*it];
+            if (t.hi[0] <= x || t.lo[0] >= x + 1 || t.hi[1] <= y || t.lo[1] >= y + 1) continue;
+            if (!triangle_overlaps_box(t.n[0], t.n[1], t.n[2], box0[0], box0[1], x + 1.0, y + 1.0, eps)) continue;
+            double qx, qy;
+            const double d = closest_point(t, cx, cy, qx, qy);
+            if (d < best) {
+              best = d, owner = &t;
+              if (d == 0) break;
+            }
+          }
+          if (!owner) continue;
+          const Tri& t = *owner;
+          std::fill(acc.begin(), acc.end(), 0.0);
+          if (premultiply) std::fill(straight.begin(), straight.end(), 0.0);
+          for (int j = 0; j < t.ns[1]; ++j)
+            for (int i = 0; i < t.ns[0]; ++i) {
+              const double px = x + (i + 0.5) / t.ns[0], py = y + (j + 0.5) / t.ns[1];
+              // The sample's own triangle: the owner, else the first candidate that
+              // contains it (a neighbour across an inner edge), else the owner's closest
+              // point (outside every chart: never read beyond the source chart).
+              const Tri* st = &t;
+              double qx, qy;
+              if (closest_point(t, px, py, qx, qy) > 0) {
+                for (const uint32_t* it = first; it != last; ++it) {
+                  const Tri& u = tris[*it];
+                  if (&u == &t || px < u.lo[0] || px > u.hi[0] || py < u.lo[1] || py > u.hi[1]) continue;
+                  double rx, ry;
+                  if (closest_point(u, px, py, rx, ry) == 0) {
+                    st = &u, qx = px, qy = py;
+                    break;
+                  }
+                }
+              }
+              const double dx = qx - st->n[0][0], dy = qy - st->n[0][1];
+              const double ox = st->o0[0] + st->J[0][0] * dx + st->J[0][1] * dy - 0.5;
+              const double oy = st->o0[1] + st->J[1][0] * dx + st->J[1][1] * dy - 0.5;
+              const double fx = std::floor(ox), fy = std::floor(oy);
+              const double wx = ox - fx, wy = oy - fy;
+              const int x0 = wrap(int(fx), SW, opt.wrap_s), x1 = wrap(int(fx) + 1, SW, opt.wrap_s);
+              const int y0 = wrap(int(fy), SH, opt.wrap_t), y1 = wrap(int(fy) + 1, SH, opt.wrap_t);
+              const float* p00 = src + (size_t(y0) * SW + x0) * C;
+              const float* p10 = src + (size_t(y0) * SW + x1) * C;
+              const float* p01 = src + (size_t(y1) * SW + x0) * C;
+              const float* p11 = src + (size_t(y1) * SW + x1) * C;
+              const double w00 = (1 - wx) * (1 - wy), w10 = wx * (1 - wy), w01 = (1 - wx) * wy, w11 = wx * wy;
+              for (int c = 0; c < C; ++c) acc[c] += w00 * p00[c] + w10 * p10[c] + w01 * p01[c] + w11 * p11[c];
+              if (premultiply) {
+                const double a00 = p00[alpha], a10 = p10[alpha], a01 = p01[alpha], a11 = p11[alpha];
+                auto un = [](double v, double a) { return a > 0 ? v / a : 0.0; };
+                // Straight colour (for texels whose footprint is fully transparent).
+                for (int c = 0; c < colour_channels; ++c)
+                  straight[c] += w00 * un(p00[c], a00) + w10 * un(p10[c], a10) + w01 * un(p01[c], a01) +
+                                 w11 * un(p11[c], a11);
+              }
+            }
+          const double inv = 1.0 / (t.ns[0] * t.ns[1]);
+          float* o = &out.pixels[(size_t(y) * W + x) * C];
+          if (normal) {
+            double n[3] = {acc[0] * inv * 2 - 1, acc[1] * inv * 2 - 1, C >= 3 ? acc[2] * inv * 2 - 1 : 0.0};
+            const double rx = t.Q[0][0] * n[0] + t.Q[0][1] * n[1];
+            const double ry = t.Q[1][0] * n[0] + t.Q[1][1] * n[1];
+            n[0] = rx, n[1] = ry;
+            if (C >= 3) {
+              const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+              if (len > 1e-12) n[0] /= len, n[1] /= len, n[2] /= len;
+            } else {
+              const double len = std::sqrt(n[0] * n[0] + n[1] * n[1]);
+              if (len > 1) n[0] /= len, n[1] /= len;
+            }
+            const int nc = std::min(C, 3);
+            for (int c = 0; c < nc; ++c) o[c] = float(std::clamp((n[c] + 1) * 0.5, 0.0, 1.0));
+            for (int c = nc; c < C; ++c) o[c] = float(std::clamp(acc[c] * inv, 0.0, 1.0));
+          } else {
+            const double a = has_alpha ? acc[alpha] * inv : 1.0;
+            for (int c = 0; c < colour_channels; ++c) {
+              double v = acc[c] * inv;
+              if (premultiply) v = a > 1e-7 ? v / a : straight[c] * inv;
+              float f = float(std::clamp(v, 0.0, 1.0));
+              if (linear) f = linear_to_srgb(f);
+              o[c] = f;
+            }
+            if (has_alpha) o[alpha] = float(std::clamp(a, 0.0, 1.0));
+          }
+          covered[size_t(y) * W + x] = 1;
+        }
+    }
+  }
+
+  size_t count = 0;
+  for (uint8_t c : covered) count += c;
+  if (opt.fill_gutter && count > 0 && count < covered.size()) {
+    const std::vector<int64_t> nearest = nearest_covered(covered, W, H);
+#pragma omp parallel for schedule(static)
+    for (int64_t i = 0; i < int64_t(W) * H; ++i) {
+      if (covered[i] || nearest[i] < 0) continue;
+      std::copy_n(&out.pixels[size_t(nearest[i]) * C], C, &out.pixels[size_t(i) * C]);
+    }
+  }
+  if (stats) {
+    stats->covered = count;
+    stats->triangles = tris.size();
+    stats->coverage = std::move(covered);
+  }
+  return out;
+}
+
+}  // namespace uvpress::atlas

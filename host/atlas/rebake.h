@@ -1,0 +1,91 @@
+// Re-baking a texture into new UVs (the CPU reference; deterministic, OpenMP static).
+//
+// For every texel of the new image, the triangle that owns it is found among the new-UV
+// triangles that overlap the texel's square (conservative rasterization): the one whose
+// distance to the texel centre is smallest (0 when the centre is inside), ties to the
+// lowest triangle index (meshes in order). The texel's footprint is mapped to the old
+// texture by that triangle's affine map (barycentrics), and the old texture is sampled:
+//
+// Filter: box-filtered supersampling of bilinear samples. The new texel's square maps to a
+// parallelogram in old texels with edges J e_x and J e_y (J = d old texel / d new texel);
+// n_x = ceil(|J e_x|) by n_y = ceil(|J e_y|) samples (each at most max_samples) on a
+// regular grid inside the new texel, each bilinear, averaged with equal weights. For an
+// integer downscale this is the exact area (box) filter (a 2x2 reduction averages four
+// texels exactly); at 1:1 or upscaling it is plain bilinear, so an identity re-bake is
+// exact. Sample points are clamped into the owning triangle, so nothing is read from
+// outside the source chart (the source's own gutter never bleeds in).
+//
+// Colour (sRGB-encoded) textures are filtered in linear light (decoded exactly through a
+// table, re-encoded with the sRGB formula): averaging encoded values darkens edges and
+// fine detail. Textures with alpha are filtered premultiplied (colour weighted by alpha,
+// then divided), so invisible texels do not tint visible ones; alpha itself is filtered
+// linearly and kept. Data textures (metallic-roughness, occlusion, ...) are filtered as
+// stored.
+//
+// Normal maps (tangent-space, glTF: +X right, +Y up in the image, i.e. toward -v): the
+// filtered vector n = 2 v - 1 has its xy rotated by the orthogonal polar factor of the
+// triangle's Jacobian old -> new, taken in texel units and conjugated by diag(1, -1) for
+// the v-down convention, then renormalized. This assumes square texels are square on the
+// surface (the true tangent frame would need 3-D positions); for conformal layouts it is
+// exact. When the Jacobian mirrors (det < 0) the factor is a reflection, which keeps xy
+// correct relative to the new u/v axes (tangents' handedness is then the caller's).
+//
+// Gutter: texels covered by no triangle take the value of the nearest covered texel
+// (exact Euclidean distance transform, Felzenszwalb-Huttenlocher, ties to the first in
+// scan order): every gutter texel holds the colour of the chart edge nearest to it, so
+// bilinear and mip sampling at chart borders sees chart colours, never background.
+#pragma once
+
+#include "core/image.h"
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+namespace uvpress::atlas {
+
+// One primitive's triangles with both UV sets (glTF convention: [0,1], v down, (0,0) the
+// image's top-left corner). Both UV arrays are indexed by `indices`; any
+// KHR_texture_transform must already be applied. Pointers must stay valid during rebake.
+struct RebakeMesh {
+  const uint32_t* indices = nullptr;
+  size_t index_count = 0;  // 3 per triangle
+  const float* old_uv = nullptr;  // u v per vertex
+  const float* new_uv = nullptr;  // u v per vertex
+  size_t vertex_count = 0;        // indices >= vertex_count are skipped
+};
+
+enum class RebakeRole {
+  Color,   // RGB sRGB-encoded (baseColor, emissive); alpha linear
+  Data,    // linear values (metallicRoughness, occlusion, masks)
+  Normal,  // tangent-space normal map: RGB = (n + 1) / 2
+};
+
+// glTF sampler wrap modes.
+constexpr int kWrapRepeat = 10497, kWrapClampToEdge = 33071, kWrapMirroredRepeat = 33648;
+
+struct RebakeOptions {
+  uint32_t width = 0, height = 0;  // the new image
+  RebakeRole role = RebakeRole::Color;
+  int wrap_s = kWrapRepeat, wrap_t = kWrapRepeat;  // the source's sampler
+  bool linear_light = true;   // Color: filter in linear light (else in stored values)
+  uint32_t max_samples = 16;  // per axis and texel
+  bool fill_gutter = true;
+};
+
+struct RebakeStats {
+  size_t covered = 0;            // texels owned by a triangle
+  size_t triangles = 0;          // non-degenerate triangles rasterized
+  std::vector<uint8_t> coverage; // width * height, 1 = covered (row 0 on top)
+};
+
+// Same channel count and bit depth as `source`. Throws std::invalid_argument for an empty
+// source or zero size.
+Image rebake(const Image& source, const std::vector<RebakeMesh>& meshes, const RebakeOptions& options,
+             RebakeStats* stats = nullptr);
+
+// sRGB transfer functions (IEC 61966-2-1), exposed for tests and callers.
+float srgb_to_linear(float v);
+float linear_to_srgb(float v);
+
+}  // namespace uvpress::atlas
