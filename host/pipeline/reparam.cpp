@@ -235,8 +235,20 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
       }
     }
 
-    // Mesh stage per chart.
+    // Mesh stage per chart. Weights floored relative to the whole layout's mean (not only
+    // the chart's): a chart of flat signal has weights near 0 everywhere and would follow
+    // its targets only at w / (w + w_rs) per iteration.
     auto t0 = Clock::now();
+    perceptual::MeshStageOptions mesh_options;
+    {
+      double sum = 0;
+      size_t n = 0;
+      for (const auto& set : chart_targets)
+        for (const auto& t : set)
+          if (std::isfinite(t.weight_rotation) && std::isfinite(t.weight_stretch))
+            sum += t.weight_rotation + t.weight_stretch, n += 2;
+      mesh_options.weight_floor = n ? 1e-3 * sum / double(n) : 0;
+    }
     for (size_t c = 0; c < charts.size(); ++c) {
       Chart& ch = charts[c];
       if (!o.optimize || ch.rigid) {
@@ -246,7 +258,7 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
       std::vector<perceptual::TriangleTarget> targets;
       targets.reserve(ch.triangles.size());
       for (uint32_t t : ch.triangles) targets.push_back(chart_targets[ch.uv_set][t]);
-      ch.new_uv = perceptual::fit_chart(ch.uv, ch.local, targets).uv;
+      ch.new_uv = perceptual::fit_chart(ch.uv, ch.local, targets, mesh_options).uv;
       if (progress) progress("mesh stage (layout " + std::to_string(li) + ")", c + 1, charts.size());
     }
     // No triangle may flip relative to the input.
