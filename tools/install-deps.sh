@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Installs everything uvpress needs to build, test and run its demo on Debian bookworm:
-# Debian packages through apt-get, and the Khronos glTF validator from npm into
+# Debian packages through apt-get (gnuplot-nox draws eval's plot; chromium lets the eval
+# HTML test load the report headless), and the Khronos glTF validator from npm into
 # tools/node_modules (project-local, never global). Idempotent: when everything is
 # present it only checks and returns.
 set -euo pipefail
@@ -13,6 +14,7 @@ packages=(
   libtinygltf-dev nlohmann-json3-dev libstb-dev
   libopenimageio-dev openimageio-tools
   catch2 libcli11-dev libnlopt-cxx-dev
+  gnuplot-nox chromium
 )
 
 missing=()
