@@ -33,7 +33,6 @@ void add_bench(CLI::App& app, Globals& g) {
   add_bench_triangles(*bench, g);
   add_bench_flatten(*bench, g);
   add_bench_eval(*bench, g);
-  add_bench_eval(*bench, g);
 }
 
 }  // namespace uvpress::cli
