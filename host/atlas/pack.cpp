@@ -186,8 +186,6 @@ Packing pack_charts(const std::vector<ChartShape>& charts, uint32_t width, uint3
 
   std::vector<int32_t> horizon(wc, 0);  // first free row per column (below every footprint)
   int32_t top = 0;                      // rows used, gutters included
-  std::vector<int64_t> costs;
-  std::vector<int32_t> ys;
   for (size_t i : order) {
     const Footprint& f = prints[i];
     Candidate best;
@@ -198,25 +196,29 @@ Packing pack_charts(const std::vector<ChartShape>& charts, uint32_t width, uint3
       const int32_t dw = int32_t(p.dtop.size());
       if (dw > wc || p.dh > hc) continue;
       const int32_t nx = wc - dw + 1;
-      costs.assign(nx, std::numeric_limits<int64_t>::max());
-      ys.assign(nx, 0);
-#pragma omp parallel for schedule(static) if (int64_t(nx) * dw > 65536)
+      // Serial scan (a parallel region per chart costs more than it saves): a candidate is
+      // pruned as soon as a lower bound of its cost exceeds the best so far (exact: ties are
+      // still evaluated, and the order (cost, y, x, k) is total).
       for (int32_t x = 0; x < nx; ++x) {
+        Candidate& lb = best;
+        const int64_t limit = lb.cost;
         int32_t y = 0;
-        for (int32_t c = 0; c < dw; ++c)
-          if (p.dtop[c] != INT32_MAX) y = std::max(y, horizon[x + c] - p.dtop[c]);
-        if (y + p.dh > hc) continue;
-        int64_t waste = 0;
-        for (int32_t c = 0; c < dw; ++c)
-          if (p.dtop[c] != INT32_MAX) waste += y + p.dtop[c] - horizon[x + c];
-        const int64_t growth = std::max(0, y + p.dh - top);
-        costs[x] = growth * wc + waste;
-        ys[x] = y;
-      }
-      for (int32_t x = 0; x < nx; ++x) {
-        if (costs[x] == std::numeric_limits<int64_t>::max()) continue;
-        Candidate c{costs[x], ys[x], x, uint32_t(k)};
-        if (c < best) best = c;
+        bool pruned = false;
+        for (int32_t c = 0; c < dw; ++c) {
+          if (p.dtop[c] == INT32_MAX) continue;
+          y = std::max(y, horizon[x + c] - p.dtop[c]);
+          if (y + p.dh > hc || int64_t(std::max(0, y + p.dh - top)) * wc > limit) {
+            pruned = true;
+            break;
+          }
+        }
+        if (pruned) continue;
+        int64_t cost = int64_t(std::max(0, y + p.dh - top)) * wc;
+        for (int32_t c = 0; c < dw && cost <= limit; ++c)
+          if (p.dtop[c] != INT32_MAX) cost += y + p.dtop[c] - horizon[x + c];
+        if (cost > limit) continue;
+        Candidate cand{cost, y, x, uint32_t(k)};
+        if (cand < lb) lb = cand;
       }
     }
     if (best.cost == std::numeric_limits<int64_t>::max()) return out;  // does not fit

@@ -17,8 +17,8 @@
 // image edge. With `block` = b > 1 (4 for BCn), packing happens on b x b cells: footprints
 // are sets of whole cells, chart origins sit on multiples of b, chart extents are whole
 // cells, the gutter is rounded up to whole cells, and no b x b block holds texels of two
-// charts. Everything is deterministic (OpenMP only evaluates candidate positions; the
-// choice is a fixed-order scan).
+// charts. Everything is deterministic and single-threaded (a serial scan with exact
+// pruning; candidates are ordered by (cost, y, x, rotation)).
 #pragma once
 
 #include <array>
@@ -76,7 +76,7 @@ Packing pack_charts(const std::vector<ChartShape>& charts, uint32_t width, uint3
 // does not. ok = false when nothing fits even at scale 1e-6 (too many charts for the
 // gutters).
 Packing pack_max_scale(const std::vector<ChartShape>& charts, uint32_t width, uint32_t height,
-                       const PackOptions& options = {}, double s_max = 1.0, double tolerance = 1e-4);
+                       const PackOptions& options = {}, double s_max = 1.0, double tolerance = 1e-3);
 
 // (c) Atlas size from a budget.
 enum class CostMeasure {
