@@ -1,0 +1,138 @@
+// reparam end to end on real assets: valid output, nothing flipped, textures that look
+// the same through the new UVs, and what must stay untouched does.
+#include <catch2/catch.hpp>
+
+#include "engine.h"
+#include "io/asset.h"
+#include "io/gltf_io.h"
+#include "io/image_io.h"
+#include "pipeline/demo_asset.h"
+#include "pipeline/reparam.h"
+#include "support.h"
+
+#include <cmath>
+#include <random>
+
+using namespace uvpress;
+
+namespace {
+
+// Bilinear sample (clamp to edge) of channel c at UV (glTF convention).
+float sample(const Image& img, float u, float v, uint32_t c) {
+  float s = std::min(std::max(u * img.width - 0.5f, 0.0f), float(img.width - 1));
+  float t = std::min(std::max(v * img.height - 0.5f, 0.0f), float(img.height - 1));
+  uint32_t i0 = uint32_t(s), j0 = uint32_t(t), i1 = std::min(i0 + 1, img.width - 1), j1 = std::min(j0 + 1, img.height - 1);
+  float fs = s - float(i0), ft = t - float(j0);
+  return (1 - ft) * ((1 - fs) * img.at(i0, j0, c) + fs * img.at(i1, j0, c)) +
+         ft * ((1 - fs) * img.at(i0, j1, c) + fs * img.at(i1, j1, c));
+}
+
+// Mean absolute difference between the old texture through the old UVs and the new
+// texture through the new UVs, at random points inside every triangle of `primitive`
+// (away from triangle edges, where gutters and seams live).
+double surface_difference(const io::GltfFile& before, const io::GltfFile& after, size_t primitive, int tex_coord,
+                          int image) {
+  io::Asset a = io::build_asset(before), b = io::build_asset(after);
+  Image ta = io::decode_image(before.image_bytes[size_t(image)], "before");
+  Image tb = io::decode_image(after.image_bytes[size_t(image)], "after");
+  const auto& pa = a.primitives[primitive];
+  const auto& ua = pa.uv_sets[size_t(tex_coord)].uv;
+  const auto& ub = b.primitives[primitive].uv_sets[size_t(tex_coord)].uv;
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> r(0.15f, 0.7f);
+  double sum = 0;
+  size_t n = 0;
+  for (size_t t = 0; t < pa.triangle_count(); ++t) {
+    float w1 = r(rng), w2 = r(rng) * (1 - w1) * 0.8f + 0.1f * (1 - w1), w0 = 1 - w1 - w2;
+    const uint32_t* f = &pa.indices[3 * t];
+    float u0 = w0 * ua[2 * f[0]] + w1 * ua[2 * f[1]] + w2 * ua[2 * f[2]];
+    float v0 = w0 * ua[2 * f[0] + 1] + w1 * ua[2 * f[1] + 1] + w2 * ua[2 * f[2] + 1];
+    float u1 = w0 * ub[2 * f[0]] + w1 * ub[2 * f[1]] + w2 * ub[2 * f[2]];
+    float v1 = w0 * ub[2 * f[0] + 1] + w1 * ub[2 * f[1] + 1] + w2 * ub[2 * f[2] + 1];
+    for (uint32_t c = 0; c < std::min(3u, ta.channels); ++c) sum += std::abs(sample(ta, u0, v0, c) - sample(tb, u1, v1, c));
+    ++n;
+  }
+  return sum / double(n * std::min(3u, ta.channels));
+}
+
+pipeline::ReparamOptions keep_shapes(double cost = 1.0) {
+  pipeline::ReparamOptions o;
+  o.optimize = false;
+  o.cost = cost;
+  return o;
+}
+
+}  // namespace
+
+TEST_CASE("reparam without optimization at the same cost: the textures look the same through the new UVs",
+          "[pipeline][reparam][shared]") {
+  if (!test::shared_dir()) UVPRESS_SKIP("../shared is absent");
+  auto engine = engine::make_cpu_engine({});
+  io::GltfFile in = io::load_gltf((*test::shared_dir() / "assets/Duck/glTF-Binary/Duck.glb").string());
+  io::GltfFile out = in;
+  auto report = pipeline::reparam(out, *engine, keep_shapes(1.0));
+  CHECK(report["flips"] == 0);
+  // Bilinear resampling at about the same density: a small, stated tolerance.
+  CHECK(surface_difference(in, out, 0, 0, 0) < 0.02);
+}
+
+TEST_CASE("reparam on the demo asset: smaller texture, nothing flipped, valid, detail kept", "[pipeline][reparam]") {
+  auto engine = engine::make_cpu_engine({});
+  io::GltfFile in = pipeline::make_demo_asset({24, 256});
+  io::GltfFile out = in;
+  pipeline::ReparamOptions o;
+  o.cost = 0.5;
+  o.triangle.evaluations = 16;
+  o.triangle.view_size = 16;
+  auto report = pipeline::reparam(out, *engine, o);
+  CHECK(report["flips"] == 0);
+  CHECK(report["cost_ratio"].get<double>() <= 0.5 + 0.02);
+  CHECK(report["textures"].size() == 1);
+  test::Scratch dir("reparam-demo");
+  io::save_gltf(out, (dir / "demo.glb").string());
+  CHECK(test::validate_gltf(dir / "demo.glb")["numErrors"] == 0);
+  // At half the texels the surface still looks close to the original.
+  CHECK(surface_difference(in, out, 0, 0, 0) < 0.08);
+}
+
+TEST_CASE("reparam keeps shared assets valid and leaves tiled and transformed layouts alone", "[pipeline][reparam][shared]") {
+  if (!test::shared_dir()) UVPRESS_SKIP("../shared is absent");
+  auto engine = engine::make_cpu_engine({});
+  test::Scratch dir("reparam-shared");
+  for (const char* rel : {"Duck/glTF/Duck.gltf", "CesiumMilkTruck/glTF/CesiumMilkTruck.gltf", "MultiUVTest/glTF/MultiUVTest.gltf",
+                          "TextureTransformTest/glTF/TextureTransformTest.gltf", "BoxTextured/glTF/BoxTextured.gltf",
+                          "Fox/glTF/Fox.gltf"}) {
+    INFO(rel);
+    auto path = *test::shared_dir() / "assets" / rel;
+    io::GltfFile in = io::load_gltf(path.string());
+    io::GltfFile out = in;
+    auto report = pipeline::reparam(out, *engine, keep_shapes(0.5));
+    CHECK(report["flips"] == 0);
+    auto target = dir / (path.stem().string() + ".glb");
+    io::save_gltf(out, target.string());
+    auto before = test::validate_gltf(path), after = test::validate_gltf(target);
+    for (auto& [code, count] : after["errors"].items()) CHECK(count.get<int>() <= before["errors"].value(code, 0));
+    CHECK(after["numErrors"].get<int>() <= before["numErrors"].get<int>());
+    io::Asset a = io::build_asset(in), b = io::build_asset(out);
+    const std::string name = rel;
+    if (name.rfind("BoxTextured", 0) == 0 || name.rfind("TextureTransformTest", 0) == 0) {
+      // Untouched: same UVs, same image bytes, a warning saying why.
+      // (TextureTransformTest's marker images, sampled without a transform, are re-laid.)
+      CHECK(a.primitives[0].uv_sets[0].uv == b.primitives[0].uv_sets[0].uv);
+      CHECK(in.image_bytes[0] == out.image_bytes[0]);
+      CHECK(report["warnings"].size() >= 1);
+    } else {
+      CHECK(report["cost_ratio"].get<double>() <= 0.52);
+      CHECK(surface_difference(in, out, 0, 0, a.images[0].index) < 0.1);
+    }
+    if (name.rfind("CesiumMilkTruck", 0) == 0) {
+      // One atlas for both materials: the truck body and the wheels both read it correctly.
+      REQUIRE(out.image_bytes.size() == 1);
+      CHECK(surface_difference(in, out, 3, 0, 0) < 0.1);
+    }
+    if (name.rfind("MultiUVTest", 0) == 0) {
+      CHECK(report["layouts"].size() == 2);  // TEXCOORD_0 (baseColor) and TEXCOORD_1 (emissive) separately
+      CHECK(surface_difference(in, out, 0, 1, 1) < 0.1);
+    }
+  }
+}
