@@ -246,18 +246,19 @@ TEST_CASE("eval CLI: report JSON and an HTML report that loads in headless Chrom
   }
   // Every file the page refers to is there (offline: relative names only).
   std::ifstream hf(dir / "html" / "index.html");
-  std::stringstream html;
-  html << hf.rdbuf();
+  std::stringstream buffer;
+  buffer << hf.rdbuf();
+  const std::string html = buffer.str();
   std::regex src("src=\"([^\"]+)\"");
   size_t refs = 0;
-  for (auto it = std::sregex_iterator(html.str().begin(), html.str().end(), src); it != std::sregex_iterator(); ++it) {
+  for (auto it = std::sregex_iterator(html.begin(), html.end(), src); it != std::sregex_iterator(); ++it) {
     const std::string name = (*it)[1];
     CHECK(name.find(':') == std::string::npos);
     CHECK(test::fs::exists(dir / "html" / name));
     ++refs;
   }
   CHECK(refs >= 5);
-  CHECK(html.str().find("<script") == std::string::npos);
+  CHECK(html.find("<script") == std::string::npos);
   // Bad input: a missing file is exit 1 with the file named.
   auto bad = test::run_uvpress("eval " + (dir / "missing.glb").string());
   CHECK(bad.exit_code == 1);
