@@ -104,17 +104,23 @@ TEST_CASE("CLI: copy writes a valid .glb and .gltf", "[cli][shared]") {
   }
 }
 
-TEST_CASE("CLI: demo writes the asset and reports its device", "[cli][demo]") {
+TEST_CASE("CLI: demo writes the asset, its reparam and the eval report", "[cli][demo]") {
   test::Scratch dir("cli-demo");
-  auto r = run_uvpress("demo -o " + quoted(dir.path()) + " --device cpu -v --report " + quoted(dir / "demo.json"));
+  auto r = run_uvpress("demo -o " + quoted(dir.path()) + " --evaluations 12 --device cpu -v --report " +
+                       quoted(dir / "demo.json"));
   INFO(r.err);
   REQUIRE(r.exit_code == 0);
   CHECK(test::validate_gltf(dir / "demo.glb")["numErrors"] == 0);
+  CHECK(test::validate_gltf(dir / "demo-reparam.glb")["numErrors"] == 0);
+  CHECK(test::fs::exists(dir / "report" / "index.html"));
   CHECK_THAT(r.err, Catch::Contains("device: cpu"));
+  CHECK_THAT(r.out, Catch::Contains("cost ratio"));
   std::ifstream in(dir / "demo.json");
   auto report = nlohmann::json::parse(in);
   CHECK(report["backend"] == "cpu");
-  CHECK(report["triangles"] == 4608);
+  CHECK(report["reparam"]["flips"] == 0);
+  CHECK(report["reparam"]["cost_ratio"].get<double>() <= 0.52);
+  CHECK(report["eval"]["layouts"].size() == 3);  // input, reparam, flatten
 }
 
 TEST_CASE("CLI: bench luminance prints one JSON line per backend, validation clean", "[cli][vulkan]") {
