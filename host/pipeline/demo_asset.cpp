@@ -1,6 +1,7 @@
 #include "pipeline/demo_asset.h"
 
 #include "core/image.h"
+#include "io/gltf_append.h"
 #include "io/image_io.h"
 
 #include <cmath>
@@ -45,34 +46,6 @@ void shade(double u, double v, int size, double rgb[3]) {
   }
 }
 
-template <class T>
-int append(tinygltf::Model& m, const std::vector<T>& data, int target) {
-  auto& buffer = m.buffers[0].data;
-  while (buffer.size() % 4) buffer.push_back(0);
-  tinygltf::BufferView view;
-  view.buffer = 0;
-  view.byteOffset = buffer.size();
-  view.byteLength = data.size() * sizeof(T);
-  view.target = target;
-  const auto* bytes = reinterpret_cast<const uint8_t*>(data.data());
-  buffer.insert(buffer.end(), bytes, bytes + view.byteLength);
-  m.bufferViews.push_back(view);
-  return int(m.bufferViews.size() - 1);
-}
-
-int add_accessor(tinygltf::Model& m, int view, int component, int type, size_t count, std::vector<double> min = {},
-                 std::vector<double> max = {}) {
-  tinygltf::Accessor a;
-  a.bufferView = view;
-  a.componentType = component;
-  a.type = type;
-  a.count = count;
-  a.minValues = std::move(min);
-  a.maxValues = std::move(max);
-  m.accessors.push_back(a);
-  return int(m.accessors.size() - 1);
-}
-
 }  // namespace
 
 io::GltfFile make_demo_asset(const DemoOptions& o) {
@@ -115,18 +88,10 @@ io::GltfFile make_demo_asset(const DemoOptions& o) {
   m.asset.version = "2.0";
   m.asset.generator = "uvpress demo";
   m.buffers.resize(1);
-  std::vector<double> lo = {1e30, 1e30, 1e30}, hi = {-1e30, -1e30, -1e30};
-  for (size_t v = 0; v < positions.size(); ++v)
-    lo[v % 3] = std::min(lo[v % 3], double(positions[v])), hi[v % 3] = std::max(hi[v % 3], double(positions[v]));
-  const size_t vertex_count = positions.size() / 3;
-  int pos = add_accessor(m, append(m, positions, TINYGLTF_TARGET_ARRAY_BUFFER), TINYGLTF_COMPONENT_TYPE_FLOAT,
-                         TINYGLTF_TYPE_VEC3, vertex_count, lo, hi);
-  int nor = add_accessor(m, append(m, normals, TINYGLTF_TARGET_ARRAY_BUFFER), TINYGLTF_COMPONENT_TYPE_FLOAT,
-                         TINYGLTF_TYPE_VEC3, vertex_count);
-  int tex = add_accessor(m, append(m, uvs, TINYGLTF_TARGET_ARRAY_BUFFER), TINYGLTF_COMPONENT_TYPE_FLOAT,
-                         TINYGLTF_TYPE_VEC2, vertex_count);
-  int idx = add_accessor(m, append(m, indices, TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER),
-                         TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT, TINYGLTF_TYPE_SCALAR, indices.size());
+  int pos = io::append_float_accessor(m, positions, TINYGLTF_TYPE_VEC3);
+  int nor = io::append_float_accessor(m, normals, TINYGLTF_TYPE_VEC3);
+  int tex = io::append_float_accessor(m, uvs, TINYGLTF_TYPE_VEC2);
+  int idx = io::append_index_accessor(m, indices);
 
   tinygltf::Primitive prim;
   prim.attributes = {{"POSITION", pos}, {"NORMAL", nor}, {"TEXCOORD_0", tex}};

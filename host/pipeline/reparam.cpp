@@ -5,6 +5,7 @@
 #include "atlas/rebake.h"
 #include "core/error.h"
 #include "io/asset.h"
+#include "io/gltf_append.h"
 #include "io/image_io.h"
 #include "perceptual/mesh_stage.h"
 #include "perceptual/triangle_view.h"
@@ -101,33 +102,6 @@ double signed_area(const double* a, const double* b, const double* c) {
 std::string format_of(const std::vector<uint8_t>& bytes) {
   std::string f = io::sniff_image_format(bytes.data(), bytes.size());
   return f == "jpeg" ? "jpeg" : "png";
-}
-
-// Appends `uv` (2 floats per vertex) as a new VEC2 float accessor in buffer 0.
-int append_uv_accessor(tinygltf::Model& m, const std::vector<float>& uv) {
-  if (m.buffers.empty()) m.buffers.emplace_back();
-  auto& data = m.buffers[0].data;
-  while (data.size() % 4) data.push_back(0);
-  tinygltf::BufferView view;
-  view.buffer = 0;
-  view.byteOffset = data.size();
-  view.byteLength = uv.size() * sizeof(float);
-  view.target = TINYGLTF_TARGET_ARRAY_BUFFER;
-  const auto* bytes = reinterpret_cast<const uint8_t*>(uv.data());
-  data.insert(data.end(), bytes, bytes + view.byteLength);
-  m.bufferViews.push_back(view);
-  tinygltf::Accessor a;
-  a.bufferView = int(m.bufferViews.size() - 1);
-  a.componentType = TINYGLTF_COMPONENT_TYPE_FLOAT;
-  a.type = TINYGLTF_TYPE_VEC2;
-  a.count = uv.size() / 2;
-  a.minValues = {INFINITY, INFINITY}, a.maxValues = {-INFINITY, -INFINITY};
-  for (size_t i = 0; i < uv.size(); ++i) {
-    a.minValues[i % 2] = std::min(a.minValues[i % 2], double(uv[i]));
-    a.maxValues[i % 2] = std::max(a.maxValues[i % 2], double(uv[i]));
-  }
-  m.accessors.push_back(a);
-  return int(m.accessors.size() - 1);
 }
 
 }  // namespace
@@ -346,7 +320,7 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
     for (size_t si = 0; si < L.uv_sets.size(); ++si) {
       const io::Primitive& prim = asset.primitives[size_t(L.uv_sets[si].primitive)];
       auto& gp = file.model.meshes[size_t(prim.mesh)].primitives[size_t(prim.primitive)];
-      gp.attributes["TEXCOORD_" + std::to_string(L.uv_sets[si].tex_coord)] = append_uv_accessor(file.model, new_uv[si]);
+      gp.attributes["TEXCOORD_" + std::to_string(L.uv_sets[si].tex_coord)] = io::append_float_accessor(file.model, new_uv[si], TINYGLTF_TYPE_VEC2);
     }
     flips += layout_flips;
     total_charts += charts.size();

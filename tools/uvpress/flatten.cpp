@@ -14,6 +14,7 @@
 #include "flatten/report.h"
 #include "io/asset.h"
 #include "io/atomic_file.h"
+#include "io/gltf_append.h"
 #include "io/gltf_io.h"
 #include "io/mesh_io.h"
 
@@ -194,31 +195,11 @@ void flatten_gltf(const Globals& g, const std::string& input, const std::string&
           written[2 * i + size_t(d)] = double(float(welded_uv[p][2 * size_t(pl.welded_uv_vertex[i]) + size_t(d)]));
       charts[pl.chart].result.flips = flatten::count_flips(charts[pl.chart].mesh.triangles, written);
     }
-    auto& buffer = model.buffers[0].data;
-    while (buffer.size() % 4) buffer.push_back(0);
-    tinygltf::BufferView view;
-    view.buffer = 0;
-    view.byteOffset = buffer.size();
-    view.byteLength = uv.size() * sizeof(float);
-    view.target = TINYGLTF_TARGET_ARRAY_BUFFER;
-    const auto* bytes = reinterpret_cast<const uint8_t*>(uv.data());
-    buffer.insert(buffer.end(), bytes, bytes + view.byteLength);
-    model.bufferViews.push_back(view);
-    tinygltf::Accessor acc;
-    acc.bufferView = int(model.bufferViews.size() - 1);
-    acc.componentType = TINYGLTF_COMPONENT_TYPE_FLOAT;
-    acc.type = TINYGLTF_TYPE_VEC2;
-    acc.count = prim.vertex_count();
-    acc.minValues = {1e300, 1e300}, acc.maxValues = {-1e300, -1e300};
-    for (size_t i = 0; i < uv.size(); ++i)
-      acc.minValues[i % 2] = std::min(acc.minValues[i % 2], double(uv[i])),
-      acc.maxValues[i % 2] = std::max(acc.maxValues[i % 2], double(uv[i]));
-    if (uv.empty()) acc.minValues = acc.maxValues = {0, 0};
-    model.accessors.push_back(acc);
+    const int accessor = io::append_float_accessor(model, uv, TINYGLTF_TYPE_VEC2);
     auto& attributes = model.meshes[size_t(prim.mesh)].primitives[size_t(prim.primitive)].attributes;
     int n = 0;
     while (attributes.count("TEXCOORD_" + std::to_string(n))) ++n;
-    attributes["TEXCOORD_" + std::to_string(n)] = int(model.accessors.size() - 1);
+    attributes["TEXCOORD_" + std::to_string(n)] = accessor;
   }
   size_t flips = 0;
   for (const auto& c : charts) flips += c.result.flips;
