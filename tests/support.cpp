@@ -1,5 +1,7 @@
 #include "support.h"
 
+#include <catch2/catch.hpp>
+
 #include <algorithm>
 #include <array>
 #include <cstdio>
@@ -78,6 +80,19 @@ RunResult run_shell(const std::string& command) {
 }  // namespace
 
 RunResult run_uvpress(const std::string& args) { return run_shell(std::string(UVPRESS_BINARY) + " " + args); }
+
+void check_input_error(const Scratch& dir, const std::string& args, const fs::path& file, const std::string& reason) {
+  auto before = dir.files();
+  auto r = run_uvpress(args);
+  INFO("uvpress " << args << "\nstderr: " << r.err);
+  CHECK(r.exit_code == 1);
+  auto lines = r.err_lines();
+  REQUIRE(lines.size() == 1);
+  CHECK_THAT(lines[0], Catch::Contains(file.string()));
+  CHECK_THAT(lines[0], Catch::Contains(reason));
+  CHECK(r.out.empty());
+  CHECK(dir.files() == before);
+}
 
 nlohmann::json validate_gltf(const fs::path& file) {
   fs::path script = fs::path(UVPRESS_SOURCE_DIR) / "tools" / "validate-gltf.mjs";

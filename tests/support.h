@@ -40,6 +40,11 @@ struct RunResult {
 // Runs the uvpress binary with `args` (shell words, already quoted as needed).
 RunResult run_uvpress(const std::string& args);
 
+// Runs uvpress with `args` and checks the bad-input contract: exit 1, exactly one stderr
+// line naming `file` and containing `reason`, nothing on stdout, `dir` unchanged (no
+// output, no temporaries).
+void check_input_error(const Scratch& dir, const std::string& args, const fs::path& file, const std::string& reason);
+
 // The Khronos validator's summary of a .gltf/.glb: {"numErrors", "errors": {code: n}}.
 nlohmann::json validate_gltf(const fs::path& file);
 

@@ -17,20 +17,6 @@ namespace {
 
 std::string quoted(const test::fs::path& p) { return "'" + p.string() + "'"; }
 
-// exit 1, exactly one stderr line that names `file`, and the folder unchanged.
-void check_input_error(const test::Scratch& dir, const std::string& args, const test::fs::path& file,
-                       const std::string& reason) {
-  auto before = dir.files();
-  auto r = run_uvpress(args);
-  INFO("uvpress " << args << "\nstderr: " << r.err);
-  CHECK(r.exit_code == 1);
-  auto lines = r.err_lines();
-  REQUIRE(lines.size() == 1);
-  CHECK_THAT(lines[0], Catch::Contains(file.string()));
-  CHECK_THAT(lines[0], Catch::Contains(reason));
-  CHECK(r.out.empty());
-  CHECK(dir.files() == before);  // no output, no temporaries
-}
 
 }  // namespace
 
@@ -61,16 +47,16 @@ TEST_CASE("CLI: malformed inputs give exit 1, one line naming the file, no outpu
       << R"({"asset":{"version":"2.0"},"extensionsUsed":["EXT_unknown_thing"],"extensionsRequired":["EXT_unknown_thing"]})";
   auto out = dir / "out.glb";
 
-  check_input_error(dir, "copy " + quoted(dir / "truncated.glb") + " -o " + quoted(out), dir / "truncated.glb", "");
-  check_input_error(dir, "copy " + quoted(dir / "bad.gltf") + " -o " + quoted(out), dir / "bad.gltf", "");
-  check_input_error(dir, "copy " + quoted(dir / "noimage.gltf") + " -o " + quoted(out), dir / "noimage.gltf",
+  test::check_input_error(dir, "copy " + quoted(dir / "truncated.glb") + " -o " + quoted(out), dir / "truncated.glb", "");
+  test::check_input_error(dir, "copy " + quoted(dir / "bad.gltf") + " -o " + quoted(out), dir / "bad.gltf", "");
+  test::check_input_error(dir, "copy " + quoted(dir / "noimage.gltf") + " -o " + quoted(out), dir / "noimage.gltf",
                     "gone.png");
-  check_input_error(dir, "copy " + quoted(dir / "required.gltf") + " -o " + quoted(out), dir / "required.gltf",
+  test::check_input_error(dir, "copy " + quoted(dir / "required.gltf") + " -o " + quoted(out), dir / "required.gltf",
                     "EXT_unknown_thing");
-  check_input_error(dir, "info " + quoted(dir / "nothere.glb"), dir / "nothere.glb", "not found");
-  check_input_error(dir, "copy " + quoted(dir / "good.glb") + " -o " + quoted(dir / "out.fbx"), dir / "out.fbx",
+  test::check_input_error(dir, "info " + quoted(dir / "nothere.glb"), dir / "nothere.glb", "not found");
+  test::check_input_error(dir, "copy " + quoted(dir / "good.glb") + " -o " + quoted(dir / "out.fbx"), dir / "out.fbx",
                     "unsupported output format");
-  check_input_error(dir, "info " + quoted(dir / "truncated.glb"), dir / "truncated.glb", "");
+  test::check_input_error(dir, "info " + quoted(dir / "truncated.glb"), dir / "truncated.glb", "");
 }
 
 TEST_CASE("CLI: info prints Duck's triangles, UV set and texture", "[cli][shared]") {

@@ -44,18 +44,6 @@ std::string slurp(const test::fs::path& p) {
   return std::string(std::istreambuf_iterator<char>(in), {});
 }
 
-void check_error(const test::Scratch& dir, const std::string& args, const test::fs::path& file,
-                 const std::string& reason) {
-  auto before = dir.files();
-  auto r = run_uvpress(args);
-  INFO("uvpress " << args << "\nstderr: " << r.err);
-  CHECK(r.exit_code == 1);
-  auto lines = r.err_lines();
-  REQUIRE(lines.size() == 1);
-  CHECK_THAT(lines[0], Catch::Contains(file.string()));
-  CHECK_THAT(lines[0], Catch::Contains(reason));
-  CHECK(dir.files() == before);  // nothing written
-}
 
 }  // namespace
 
@@ -130,14 +118,14 @@ TEST_CASE("flatten CLI: non-disk, empty, NaN and unsupported inputs exit 1 with 
   std::ofstream(dir / "two.obj") << "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 5 0 0\nv 6 0 0\nv 5 1 0\nf 1 2 3\nf 4 5 6\n";
   std::ofstream(dir / "mesh.ply") << "ply\n";
   auto out = dir / "out.obj";
-  check_error(dir, "flatten " + quoted(dir / "holes.obj") + " -o " + quoted(out), dir / "holes.obj",
+  test::check_input_error(dir, "flatten " + quoted(dir / "holes.obj") + " -o " + quoted(out), dir / "holes.obj",
               "3 boundary loops");
-  check_error(dir, "flatten " + quoted(dir / "two.obj") + " -o " + quoted(out), dir / "two.obj",
+  test::check_input_error(dir, "flatten " + quoted(dir / "two.obj") + " -o " + quoted(out), dir / "two.obj",
               "2 connected components");
-  check_error(dir, "flatten " + quoted(dir / "empty.obj") + " -o " + quoted(out), dir / "empty.obj", "no faces");
-  check_error(dir, "flatten " + quoted(dir / "nan.obj") + " -o " + quoted(out), dir / "nan.obj", "non-finite");
-  check_error(dir, "flatten " + quoted(dir / "mesh.ply") + " -o " + quoted(out), dir / "mesh.ply", "unsupported");
-  check_error(dir, "flatten " + quoted(dir / "holes.obj") + " -o " + quoted(dir / "out.ply"), dir / "out.ply",
+  test::check_input_error(dir, "flatten " + quoted(dir / "empty.obj") + " -o " + quoted(out), dir / "empty.obj", "no faces");
+  test::check_input_error(dir, "flatten " + quoted(dir / "nan.obj") + " -o " + quoted(out), dir / "nan.obj", "non-finite");
+  test::check_input_error(dir, "flatten " + quoted(dir / "mesh.ply") + " -o " + quoted(out), dir / "mesh.ply", "unsupported");
+  test::check_input_error(dir, "flatten " + quoted(dir / "holes.obj") + " -o " + quoted(dir / "out.ply"), dir / "out.ply",
               "unsupported output format");
   CHECK(run_uvpress("flatten " + quoted(dir / "holes.obj") + " -o " + quoted(out) + " --method newton").exit_code == 2);
 }
