@@ -37,6 +37,7 @@ void add_demo(CLI::App& app, Globals& g);
 void add_bench(CLI::App& app, Globals& g);
 void add_flatten(CLI::App& app, Globals& g);
 void add_eval(CLI::App& app, Globals& g);
+void add_batch(CLI::App& app, Globals& g);
 
 // "1.2 MB"-style size for summary lines.
 std::string human_bytes(uint64_t bytes);

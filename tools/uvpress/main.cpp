@@ -77,6 +77,7 @@ int main(int argc, char** argv) {
   cli::add_bench(app, g);
   cli::add_flatten(app, g);
   cli::add_eval(app, g);
+  cli::add_batch(app, g);
 
   try {
     app.parse(argc, argv);

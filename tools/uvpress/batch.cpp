@@ -1,0 +1,165 @@
+// uvpress batch --manifest LIST -o DIR [reparam options] [--eval] [--shard-index I
+//   --shard-count N] [--jobs N] [--force] [--collect]: reparam (and eval) over every asset a
+// manifest lists, resumable, sharded for array jobs (Slurm, Kubernetes, AWS Batch); see
+// host/pipeline/batch.h.
+#include "cli.h"
+
+#include "core/error.h"
+#include "pipeline/batch.h"
+
+#include <cstdio>
+#include <cstdlib>
+#include <optional>
+#include <unistd.h>
+
+namespace uvpress::cli {
+
+namespace {
+
+class UsageError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+void write_line(const std::string& line) {
+  std::string s = line + "\n";
+  for (size_t at = 0; at < s.size();) {  // one write per line: workers share stderr
+    ssize_t n = ::write(2, s.data() + at, s.size() - at);
+    if (n <= 0) break;
+    at += size_t(n);
+  }
+}
+
+std::string cell(const nlohmann::ordered_json& row, const char* key, const char* format) {
+  if (!row.contains(key) || !row[key].is_number()) return "-";
+  char buf[48];
+  std::snprintf(buf, sizeof buf, format, row[key].get<double>());
+  return buf;
+}
+
+void print_table(const nlohmann::ordered_json& summary) {
+  size_t w = 5;
+  for (const auto& a : summary["assets"]) w = std::max(w, a["name"].get<std::string>().size());
+  std::printf("%-*s  %-8s  %8s  %10s  %10s  %s\n", int(w), "asset", "status", "seconds", "cost ratio", "size out",
+              "output / error");
+  for (const auto& a : summary["assets"]) {
+    std::string status = a["status"].get<std::string>();
+    std::string size = a.contains("output_bytes") ? human_bytes(a["output_bytes"].get<uint64_t>()) : "-";
+    std::string last = status == "ok" || status == "skipped" ? a.value("output", "") : a.value("error", "");
+    std::printf("%-*s  %-8s  %8s  %10s  %10s  %s\n", int(w), a["name"].get<std::string>().c_str(),
+                status == "failed" ? "FAILED" : status.c_str(),
+                cell(a, "seconds", "%.1f").c_str(), cell(a, "cost_ratio", "%.3f").c_str(), size.c_str(), last.c_str());
+  }
+  const auto& c = summary["counts"];
+  std::printf("%zu assets: %d ok, %d skipped, %d failed", summary["assets"].size(), c.value("ok", 0), c.value("skipped", 0),
+              c.value("failed", 0) + c.value("missing", 0) + c.value("stale", 0));
+  if (summary.contains("shard"))
+    std::printf(" (shard %zu of %zu)", summary["shard"]["index"].get<size_t>(), summary["shard"]["count"].get<size_t>());
+  std::printf(" in %.1f s\n", summary["seconds"].get<double>());
+}
+
+}  // namespace
+
+void add_batch(CLI::App& app, Globals& g) {
+  auto* cmd = app.add_subcommand("batch", "reparam (and eval) over a manifest of assets: resumable, sharded, parallel");
+  struct Args {
+    pipeline::BatchOptions o;
+    bool no_optimize = false, collect = false;
+    std::vector<double> grid;
+    std::optional<size_t> shard_index, shard_count;
+  };
+  auto a = std::make_shared<Args>();
+  auto& o = a->o;
+  cmd->add_option("--manifest", o.manifest, "Text file: one asset path a line ('#' comments; relative to the file)")->required();
+  cmd->add_option("-o,--output", o.output_dir, "Output folder (created when missing)")->required();
+  cmd->add_option("--format", o.format, "Output format of each asset")->capture_default_str()->check(CLI::IsMember({"glb", "gltf"}));
+  auto* cost = cmd->add_option("--cost", o.reparam.cost, "Texels of the new textures relative to the old (0.5: half)")
+                   ->capture_default_str()
+                   ->check(CLI::Range(0.001, 1.0));
+  cmd->add_option("--size", o.reparam.size, "New size of the driving texture's longer side, instead of --cost")
+      ->check(CLI::Range(8u, 16384u))
+      ->excludes(cost);
+  cmd->add_flag("--pot", o.reparam.power_of_two, "Power-of-two texture sizes");
+  cmd->add_option("--gutter", o.reparam.gutter, "Texels between charts and at the edge")->capture_default_str()->check(CLI::Range(0u, 64u));
+  cmd->add_option("--block-align", o.reparam.block, "Align charts to N x N blocks (4 for BCn)")->check(CLI::IsMember({1u, 4u}));
+  cmd->add_option("--epsilon", o.reparam.triangle.epsilon, "GMSD bound per triangle view (eq. 12)")->capture_default_str()->check(CLI::Range(1e-4, 0.5));
+  cmd->add_option("--evaluations", o.reparam.triangle.evaluations, "GP-BO evaluations per triangle")->capture_default_str()->check(CLI::Range(11, 1000));
+  cmd->add_option("--view-size", o.reparam.triangle.view_size, "Per-triangle view size in pixels")->capture_default_str()->check(CLI::IsMember({16u, 32u, 48u, 64u}));
+  cmd->add_option("--seed", o.reparam.triangle.seed, "Seed of the Bayesian optimization")->capture_default_str();
+  cmd->add_flag("--no-optimize", a->no_optimize, "Keep every triangle's shape: only repack and re-bake");
+  cmd->add_flag("--eval", o.eval, "Also evaluate each result against its input (NAME.eval.json)");
+  cmd->add_option("--eval-resolution", o.eval_options.resolution, "eval: view images, pixels a side")->capture_default_str()->check(CLI::Range(8u, 1024u));
+  cmd->add_option("--eval-cost-grid", a->grid, "eval: relative costs, comma-separated")->delimiter(',');
+  cmd->add_option("--shard-index", a->shard_index, "This shard (default: SLURM_ARRAY_TASK_ID, JOB_COMPLETION_INDEX, AWS_BATCH_JOB_ARRAY_INDEX)");
+  cmd->add_option("--shard-count", a->shard_count, "Number of shards (default: SLURM_ARRAY_TASK_COUNT, else one asset per index)")
+      ->check(CLI::Range(size_t(1), size_t(1) << 40));
+  cmd->add_option("--jobs", o.jobs, "Assets processed at once, each in its own process with cores/N threads")->capture_default_str()->check(CLI::Range(1u, 256u));
+  cmd->add_flag("--force", o.force, "Redo assets whose results are up to date");
+  cmd->add_flag("--collect", a->collect, "Process nothing: summarize every asset's report in DIR (after an array job)");
+  cmd->callback([&g, a] {
+    g.action = [&g, a]() -> int {
+      pipeline::BatchOptions o = a->o;
+      o.reparam.optimize = !a->no_optimize;
+      o.version = UVPRESS_VERSION;
+      if (!a->grid.empty()) o.eval_options.cost_grid = a->grid;
+      if (a->collect) {
+        auto summary = pipeline::collect_batch(o);
+        print_table(summary);
+        g.write_report(summary);
+        return summary["counts"].value("ok", 0) == int(summary["assets"].size()) ? 0 : 1;
+      }
+      try {
+        auto env = pipeline::shard_from_environment([](const char* n) { return std::getenv(n); });
+        size_t items = 0;
+        if (!a->shard_count && !env.count && (a->shard_index || env.index)) items = pipeline::read_manifest(o.manifest).size();
+        o.shard_index = a->shard_index.value_or(env.index.value_or(0));
+        o.shard_count = a->shard_count ? *a->shard_count : env.count ? *env.count : (a->shard_index || env.index) ? items : 1;
+        if (g.verbose && !env.source.empty() && !a->shard_index)
+          std::fprintf(stderr, "batch: shard %zu of %zu from %s\n", o.shard_index, o.shard_count, env.source.c_str());
+        if (o.shard_index >= o.shard_count)
+          throw UsageError("shard index " + std::to_string(o.shard_index) + " is not below the shard count " +
+                           std::to_string(o.shard_count));
+      } catch (const std::invalid_argument& e) {
+        throw UsageError(e.what());
+      }
+      const std::string device = g.device;
+      const bool validation = g.validation, verbose = g.verbose;
+      auto factory = [device, validation, verbose](unsigned threads) {
+        auto request = engine::parse_device_request(device);
+        if (!request) throw engine::EngineError("--device '" + device + "' is not one of auto, gpu, lavapipe, cpu");
+        engine::EngineOptions eo;
+        eo.validation = validation;
+        eo.threads = threads;
+        auto e = engine::make_engine(*request, eo);
+        if (verbose) {
+          auto d = e->device();
+          write_line("device: " + d.backend + " " + d.name + " (" + d.type + ")");
+        }
+        return e;
+      };
+      nlohmann::ordered_json summary;
+      try {
+        summary = pipeline::run_batch(o, factory, write_line);
+      } catch (const std::invalid_argument& e) {
+        throw UsageError(e.what());
+      }
+      print_table(summary);
+      std::fflush(stdout);
+      write_line("batch: summary in " + pipeline::summary_path(o));
+      g.write_report(summary);
+      return summary["counts"].value("failed", 0) > 0 ? 1 : 0;
+    };
+    // Usage errors found after parsing (bad shard) exit 2 like CLI11's own.
+    auto inner = g.action;
+    g.action = [inner]() -> int {
+      try {
+        return inner();
+      } catch (const UsageError& e) {
+        std::fprintf(stderr, "uvpress: batch: %s (see uvpress batch --help)\n", e.what());
+        return 2;
+      }
+    };
+  });
+}
+
+}  // namespace uvpress::cli
