@@ -1,28 +1,13 @@
 #include "atlas/charts.h"
 
+#include "core/disjoint_sets.h"
+
 #include <array>
 #include <cstring>
 #include <numeric>
 #include <unordered_map>
 
 namespace uvpress::atlas {
-
-namespace {
-
-struct DisjointSets {
-  std::vector<uint32_t> parent;
-  explicit DisjointSets(size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0u); }
-  uint32_t find(uint32_t x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];  // path halving
-    return x;
-  }
-  void unite(uint32_t a, uint32_t b) {
-    a = find(a), b = find(b);
-    if (a != b) parent[std::max(a, b)] = std::min(a, b);  // smaller root wins: deterministic
-  }
-};
-
-}  // namespace
 
 Charts find_charts(const Mesh& mesh) {
   const size_t nt = mesh.triangle_count();

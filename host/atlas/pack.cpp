@@ -250,9 +250,11 @@ Packing pack_charts(const std::vector<ChartShape>& charts, uint32_t width, uint3
   return out;
 }
 
-Packing pack_max_scale(const std::vector<ChartShape>& charts, uint32_t width, uint32_t height,
-                       const PackOptions& options, double s_max, double tolerance) {
-  double area1 = 0;  // chart area at scale 1
+namespace {
+
+// Sum of |triangle areas| of all charts at scale 1 (out-of-range indices skipped).
+double chart_area(const std::vector<ChartShape>& charts) {
+  double area = 0;
   for (const auto& c : charts) {
     const size_t n = c.points.size() / 2;
     for (size_t t = 0; t + 2 < c.triangles.size(); t += 3) {
@@ -261,9 +263,17 @@ Packing pack_max_scale(const std::vector<ChartShape>& charts, uint32_t width, ui
       const double* a = &c.points[2 * i];
       const double* b = &c.points[2 * j];
       const double* d = &c.points[2 * k];
-      area1 += 0.5 * std::abs((b[0] - a[0]) * (d[1] - a[1]) - (b[1] - a[1]) * (d[0] - a[0]));
+      area += 0.5 * std::abs((b[0] - a[0]) * (d[1] - a[1]) - (b[1] - a[1]) * (d[0] - a[0]));
     }
   }
+  return area;
+}
+
+}  // namespace
+
+Packing pack_max_scale(const std::vector<ChartShape>& charts, uint32_t width, uint32_t height,
+                       const PackOptions& options, double s_max, double tolerance) {
+  const double area1 = chart_area(charts);  // at scale 1
   double hi = s_max;
   if (area1 > 0) hi = std::min(hi, std::sqrt(double(width) * height / area1));
   Packing best = pack_charts(charts, width, height, hi, options);
@@ -333,18 +343,7 @@ AtlasChoice choose_atlas(const std::vector<ChartShape>& charts, uint32_t old_wid
   rule.block = std::max<uint32_t>(1, o.pack.block);
   const double r = rule.aspect >= 1 ? rule.aspect : 1 / rule.aspect;
 
-  double area1 = 0;
-  for (const auto& c : charts) {
-    const size_t n = c.points.size() / 2;
-    for (size_t t = 0; t + 2 < c.triangles.size(); t += 3) {
-      const uint32_t i = c.triangles[t], j = c.triangles[t + 1], k = c.triangles[t + 2];
-      if (i >= n || j >= n || k >= n) continue;
-      const double* a = &c.points[2 * i];
-      const double* b = &c.points[2 * j];
-      const double* d = &c.points[2 * k];
-      area1 += 0.5 * std::abs((b[0] - a[0]) * (d[1] - a[1]) - (b[1] - a[1]) * (d[0] - a[0]));
-    }
-  }
+  const double area1 = chart_area(charts);
 
   auto fits_at = [&](uint32_t L, double s) {
     auto d = rule.dims(L);
