@@ -104,6 +104,10 @@ std::string format_of(const std::vector<uint8_t>& bytes) {
   return f == "jpeg" ? "jpeg" : "png";
 }
 
+bool has_tangents(const tinygltf::Model& m, const io::Primitive& p) {
+  return m.meshes[size_t(p.mesh)].primitives[size_t(p.primitive)].attributes.count("TANGENT") > 0;
+}
+
 }  // namespace
 
 json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o, const Progress& progress) {
@@ -295,12 +299,17 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
       ro.height = std::max(1u, uint32_t(std::lround(double(packing.height) * source.height / H)));
       ro.role = atlas::RebakeRole::Color;
       for (const auto& use : img.uses) {
-        if (use.role == io::TextureRole::Normal) ro.role = atlas::RebakeRole::Normal;
+        // A tangent-space normal map is rotated into the new UV frame, which is the frame a
+        // renderer derives (MikkTSpace) when the mesh has no TANGENT attribute. With stored
+        // tangents the frame stays the old one, so the texels must stay as they are.
+        if (use.role == io::TextureRole::Normal)
+          ro.role = has_tangents(file.model, asset.primitives[size_t(use.primitive)]) ? atlas::RebakeRole::Data
+                                                                                      : atlas::RebakeRole::Normal;
         else if (io::color_space_of(use.role) == ColorSpace::Linear && ro.role == atlas::RebakeRole::Color)
           ro.role = atlas::RebakeRole::Data;
         ro.wrap_s = use.wrap_s, ro.wrap_t = use.wrap_t;
       }
-      Image baked = atlas::rebake(source, meshes, ro);
+      Image baked = atlas::rebake(source, meshes, ro, nullptr, &engine);
       const std::vector<uint8_t> old_bytes = file.image_bytes[size_t(i)];
       file.image_bytes[size_t(i)] = io::encode_image(baked, format_of(old_bytes));
       old_texels += double(source.width) * source.height;
