@@ -60,6 +60,7 @@ struct LuminanceBatch {
 using shader::ViewCandidate;
 using shader::ViewDesc;
 using shader::ViewTriangle;
+using shader::kRebakeTile;
 
 // Everything needed to render a set of per-triangle views: the ring triangles in view
 // space and the source texture's luminance (GMSD step 1 applied to the stored values).
@@ -135,6 +136,63 @@ constexpr uint32_t kNoMeshTriangle = 0xffffffffu;
 // Throws EngineError for a description that breaks the limits above.
 void check_mesh_render(const MeshRenderDesc& desc);
 
+// ---- Texture re-bake sampling (host/atlas/rebake.cpp; engine/cpu/rebake_texels.cpp) ----
+//
+// The per-texel sampling loop of a re-bake. The host sets up the triangles (texel units,
+// double), bins them in kRebakeTile x kRebakeTile tiles of the new image and picks the
+// owner triangle of every covered texel; the engine filters each owned texel's footprint
+// in the source: n_x by n_y samples (the owner's `ns`) on a regular grid inside the new
+// texel, each mapped to the source by the affine map of the triangle that contains it (the
+// owner; else the first other triangle of the tile's list that contains it; else the
+// owner's closest point), sampled bilinearly (texel centres at integers + 0.5, glTF wrap
+// modes) and averaged with equal weights.
+struct RebakeTriangle {
+  double n[3][2];       // vertices in new texel coordinates
+  double o0[2];         // vertex 0 in old (source) texel coordinates
+  double J[2][2];       // d old / d new, texel units
+  double lo[2], hi[2];  // bounding box in new texels
+  double sign;          // +1 or -1: orientation of the new triangle
+  int ns[2];            // samples per axis, >= 1
+};
+
+constexpr uint32_t kRebakeNoOwner = 0xffffffffu;
+// glTF sampler wrap codes; anything else wraps as REPEAT.
+constexpr int kRebakeWrapRepeat = 10497, kRebakeWrapClampToEdge = 33071, kRebakeWrapMirroredRepeat = 33648;
+
+struct RebakeTexelsDesc {
+  uint32_t width = 0, height = 0;  // the new image
+  // The working source: source_height rows of source_width texels, `channels` floats each
+  // (1..4), row 0 on top; colour already linearized and premultiplied by the host.
+  const float* source = nullptr;
+  uint32_t source_width = 0, source_height = 0, channels = 0;
+  int wrap_s = kRebakeWrapRepeat, wrap_t = kRebakeWrapRepeat;
+  // The source is premultiplied by its last channel (channels 2 or 4): the result is
+  // un-premultiplied, and a footprint whose mean alpha is <= 1e-7 gets the mean of the
+  // straight colours instead of 0/0.
+  bool premultiplied = false;
+  const RebakeTriangle* triangles = nullptr;
+  size_t triangle_count = 0;
+  // Tiles of kRebakeTile texels, row-major, tiles_x = ceil(width / kRebakeTile): the
+  // triangles meeting tile k are tile_list[tile_start[k] .. tile_start[k + 1]), in order.
+  const uint32_t* tile_start = nullptr;  // tiles_x * tiles_y + 1
+  const uint32_t* tile_list = nullptr;
+  // Per texel (width * height, row 0 on top): the position in tile_list, within the
+  // texel's own tile, of the owner triangle; kRebakeNoOwner where uncovered.
+  const uint32_t* owner = nullptr;
+};
+
+// Throws EngineError for a description that breaks the rules above.
+void check_rebake_texels(const RebakeTexelsDesc& desc);
+
+// Squared distance from p to triangle t (0 inside or on an edge) and the closest point:
+// the geometry both the host's owner search and the CPU kernel use.
+double rebake_closest_point(const RebakeTriangle& t, double px, double py, double& qx, double& qy);
+
+// The CPU kernel (the oracle, double precision, deterministic for any thread count):
+// writes `channels` floats for every owned texel of `texels` (width * height * channels),
+// leaves the others untouched. threads 0 = hardware concurrency.
+void rebake_texels_cpu(const RebakeTexelsDesc& desc, float* texels, unsigned threads = 0);
+
 class Engine {
  public:
   virtual ~Engine() = default;
@@ -157,6 +215,10 @@ class Engine {
   // Whole-mesh renders (see MeshRenderDesc). The default is the CPU reference
   // (engine/cpu/render_mesh.cpp); the Vulkan backend runs render_mesh.comp.
   virtual MeshRenders render_mesh(const MeshRenderDesc& desc);
+
+  // Re-bake sampling (see RebakeTexelsDesc): writes every owned texel of `texels`. The
+  // default is rebake_texels_cpu; the Vulkan backend runs rebake.comp (fp32, local frames).
+  virtual void rebake_texels(const RebakeTexelsDesc& desc, float* texels);
 
   // Validation-layer errors seen so far (always 0 on the CPU backend).
   virtual uint64_t validation_errors() const { return 0; }

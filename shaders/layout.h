@@ -97,6 +97,49 @@ struct MeshPush {
   uint repeat;    // 1: REPEAT wrapping, 0: clamp-to-edge
 };
 
+// ---- Re-bake sampling (engine::RebakeTexelsDesc, rebake.comp) ----
+//
+// One entry of a tile's triangle list, in the tile's own frame (texel units, origin at the
+// tile's top-left corner). Every quantity x that the kernel combines with a texel's integer
+// offset (lx, ly) in the tile is split as x = xh + xl, xh on a grid of 2^-12: xh * lx is
+// then exact in fp32, so distances and source positions at a texel keep ~1e-7 texel
+// precision whatever the sizes of the triangle and the images.
+// Edge e runs from vertex e to vertex e+1: unit tangent u (u[2e], u[2e+1]), inward unit
+// normal n = sign (-u_y, u_x); p is inside when n.p >= c for all three edges; s0 = u.a and
+// s1 = u.b are its ends along u. The source position of tile point p, in source texels, is
+// (oi + of) + J p, oi integer, J row-major.
+struct RebakeEntry {
+  float uh[6], ul[6];
+  float ch[3], cl[3];
+  float s0h[3], s0l[3];
+  float s1h[3], s1l[3];
+  float sign;
+  float jh[4], jl[4];
+  int oi[2];
+  float of[2];
+  uint ns;            // samples per axis: x | y << 16
+};
+
+// One dispatch over tile rows [tile_row0, tile_row0 + groups_y) of the new image. The bound
+// buffers hold tile rows from chunk_row0 on (owner, output) and list entries from
+// entry_base on.
+struct RebakePush {
+  uint width;          // new image, texels
+  uint height;
+  uint tiles_x;
+  uint tile_row0;
+  uint chunk_row0;
+  uint entry_base;
+  uint source_width;
+  uint source_height;
+  uint channels;       // 1..4
+  uint wrap_s;         // 0 repeat, 1 clamp-to-edge, 2 mirrored repeat
+  uint wrap_t;
+  uint premultiplied;  // 1: un-premultiply by the last channel
+  uint source_split;   // source texels per source buffer (4 buffers)
+  uint pad0, pad1, pad2;
+};
+
 #ifdef __cplusplus
 constexpr uint kViewMaxSize = 64;         // S <= 64: GMSD works on a 32 x 32 shared tile
 constexpr uint kViewMaxTriangles = 64;    // 1 + one-ring
@@ -111,6 +154,9 @@ static_assert(sizeof(ImageBatchPush) == 16, "push constant layout");
 constexpr uint kMeshTile = 16;            // render_mesh.comp: one 16 x 16 workgroup a tile
 static_assert(sizeof(MeshTriangle) == 64, "std430 layout");
 static_assert(sizeof(MeshPush) == 32, "push constant layout");
+constexpr uint kRebakeTile = 16;          // re-bake tiles (host binning, rebake.comp workgroups)
+static_assert(sizeof(RebakeEntry) == 176, "std430 layout");
+static_assert(sizeof(RebakePush) == 64, "push constant layout");
 }  // namespace uvpress::shader
 #else
 #define kViewMaxSize 64u
@@ -119,6 +165,7 @@ static_assert(sizeof(MeshPush) == 32, "push constant layout");
 #define kTileMax 32u
 #define kNoTriangle 255u
 #define kMeshTile 16u
+#define kRebakeTile 16u
 #endif
 
 #endif

@@ -2,8 +2,11 @@
 
 #include "atlas/pack.h"
 
+#include <omp.h>
+
 #include <algorithm>
 #include <array>
+#include <chrono>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -51,57 +54,8 @@ inline float encode_fast(const float* table, float v) {
   return table[i] + f * (table[i + 1] - table[i]);
 }
 
-int wrap(int i, int n, int mode) {
-  if (mode == kWrapClampToEdge) return std::clamp(i, 0, n - 1);
-  if (mode == kWrapMirroredRepeat) {
-    int m = i % (2 * n);
-    if (m < 0) m += 2 * n;
-    return m < n ? m : 2 * n - 1 - m;
-  }
-  int m = i % n;  // REPEAT (and anything unknown)
-  return m < 0 ? m + n : m;
-}
-
-struct Tri {
-  double n[3][2];     // new texel coordinates
-  double o0[2];       // old texel coordinates of vertex 0
-  double J[2][2];     // d old / d new (texel units)
-  float Q[2][2];      // normal xy rotation old -> new, in y-up components
-  double lo[2], hi[2];  // bounding box (new texels)
-  double sign;        // orientation of the new triangle
-  int ns[2];          // samples per axis
-};
-
-// Closest point of triangle t to p (p itself when inside); returns the squared distance.
-double closest_point(const Tri& t, double px, double py, double& qx, double& qy) {
-  bool inside = true;
-  for (int e = 0; e < 3; ++e) {
-    const double* a = t.n[e];
-    const double* b = t.n[(e + 1) % 3];
-    const double ef = ((b[0] - a[0]) * (py - a[1]) - (b[1] - a[1]) * (px - a[0])) * t.sign;
-    if (ef < 0) {
-      inside = false;
-      break;
-    }
-  }
-  if (inside) {
-    qx = px, qy = py;
-    return 0;
-  }
-  double best = std::numeric_limits<double>::infinity();
-  for (int e = 0; e < 3; ++e) {
-    const double* a = t.n[e];
-    const double* b = t.n[(e + 1) % 3];
-    const double dx = b[0] - a[0], dy = b[1] - a[1];
-    const double len2 = dx * dx + dy * dy;
-    double s = len2 > 0 ? ((px - a[0]) * dx + (py - a[1]) * dy) / len2 : 0;
-    s = std::clamp(s, 0.0, 1.0);
-    const double cx = a[0] + s * dx, cy = a[1] + s * dy;
-    const double d = (px - cx) * (px - cx) + (py - cy) * (py - cy);
-    if (d < best) best = d, qx = cx, qy = cy;
-  }
-  return best;
-}
+// A triangle as the engine samples it, plus what only the host needs.
+using Tri = engine::RebakeTriangle;
 
 // Orthogonal polar factor of a 2x2 matrix (rotation, or reflection when det < 0).
 void polar_factor(const double M[2][2], float Q[2][2]) {
@@ -180,7 +134,7 @@ std::vector<int64_t> nearest_covered(const std::vector<uint8_t>& covered, int W,
 }  // namespace
 
 Image rebake(const Image& source, const std::vector<RebakeMesh>& meshes, const RebakeOptions& opt,
-             RebakeStats* stats) {
+             RebakeStats* stats, engine::Engine* engine) {
   if (source.width == 0 || source.height == 0 || source.channels == 0 ||
       source.pixels.size() != size_t(source.width) * source.height * source.channels)
     throw std::invalid_argument("rebake: empty or inconsistent source image");
@@ -220,12 +174,14 @@ Image rebake(const Image& source, const std::vector<RebakeMesh>& meshes, const R
 
   // Triangles in texel units.
   std::vector<Tri> tris;
+  std::vector<std::array<std::array<float, 2>, 2>> rotation;  // normal xy rotation old -> new, y-up
   for (const RebakeMesh& m : meshes) {
     if (!m.indices || !m.old_uv || !m.new_uv) continue;
     for (size_t t = 0; t + 2 < m.index_count; t += 3) {
       const uint32_t id[3] = {m.indices[t], m.indices[t + 1], m.indices[t + 2]};
       if (id[0] >= m.vertex_count || id[1] >= m.vertex_count || id[2] >= m.vertex_count) continue;
       Tri tr;
+      float Q[2][2];
       double o[3][2];
       bool finite = true;
       for (int k = 0; k < 3; ++k) {
@@ -253,27 +209,28 @@ Image rebake(const Image& source, const std::vector<RebakeMesh>& meshes, const R
       tr.o0[0] = o[0][0], tr.o0[1] = o[0][1];
       for (int a = 0; a < 2; ++a) {
         const double len = std::hypot(tr.J[0][a], tr.J[1][a]);
-        tr.ns[a] = int(std::clamp(std::ceil(len - 1e-6), 1.0, double(std::max<uint32_t>(1, opt.max_samples))));
+        tr.ns[a] = int(std::clamp(std::ceil(len - 1e-6), 1.0, double(std::clamp<uint32_t>(opt.max_samples, 1, 65535))));
       }
       // Normal rotation: polar factor of K = J^-1 (old -> new) in y-up components, S K S.
       const double dj = tr.J[0][0] * tr.J[1][1] - tr.J[0][1] * tr.J[1][0];
       if (dj != 0) {
         const double K[2][2] = {{tr.J[1][1] / dj, tr.J[0][1] / dj}, {tr.J[1][0] / dj, tr.J[0][0] / dj}};
         // S K S with S = diag(1,-1), K = [[J11, -J01], [-J10, J00]] / det: signs folded above.
-        polar_factor(K, tr.Q);
+        polar_factor(K, Q);
       } else {
-        tr.Q[0][0] = tr.Q[1][1] = 1, tr.Q[0][1] = tr.Q[1][0] = 0;
+        Q[0][0] = Q[1][1] = 1, Q[0][1] = Q[1][0] = 0;
       }
       for (int a = 0; a < 2; ++a) {
         tr.lo[a] = std::min({tr.n[0][a], tr.n[1][a], tr.n[2][a]});
         tr.hi[a] = std::max({tr.n[0][a], tr.n[1][a], tr.n[2][a]});
       }
       tris.push_back(tr);
+      rotation.push_back({{{Q[0][0], Q[0][1]}, {Q[1][0], Q[1][1]}}});
     }
   }
 
   // Bin triangles into tiles (CSR, triangle order kept).
-  constexpr int T = 16;
+  constexpr int T = int(engine::kRebakeTile);
   const int tx = (W + T - 1) / T, ty = (H + T - 1) / T;
   auto tile_range = [&](const Tri& t, int& x0, int& x1, int& y0, int& y1) {
     x0 = std::max(0, int(std::floor(t.lo[0])) / T);
@@ -305,116 +262,87 @@ Image rebake(const Image& source, const std::vector<RebakeMesh>& meshes, const R
   // texel coordinate. Overlaps thinner than that do not claim a texel.
   const double eps = 4.0 * std::numeric_limits<float>::epsilon() * std::max(W, H);
 
+  // Owners: per texel, the candidate nearest to its centre among those overlapping it.
+  std::vector<uint32_t> owner(size_t(W) * H, engine::kRebakeNoOwner);
+#pragma omp parallel for schedule(static)
+  for (int tile = 0; tile < tx * ty; ++tile) {
+    const int bx = (tile % tx) * T, by = (tile / tx) * T;
+    const uint32_t* first = list.data() + start[tile];
+    const uint32_t* last = list.data() + start[tile + 1];
+    if (first == last) continue;
+    for (int y = by; y < std::min(H, by + T); ++y)
+      for (int x = bx; x < std::min(W, bx + T); ++x) {
+        const double cx = x + 0.5, cy = y + 0.5;
+        double best = std::numeric_limits<double>::infinity();
+        const uint32_t* own = nullptr;
+        for (const uint32_t* it = first; it != last; ++it) {
+          const Tri& t = tris[*it];
+          if (t.hi[0] <= x || t.lo[0] >= x + 1 || t.hi[1] <= y || t.lo[1] >= y + 1) continue;
+          if (!triangle_overlaps_box(t.n[0], t.n[1], t.n[2], x, y, x + 1.0, y + 1.0, eps)) continue;
+          double qx, qy;
+          const double d = engine::rebake_closest_point(t, cx, cy, qx, qy);
+          if (d < best) {
+            best = d, own = it;
+            if (d == 0) break;
+          }
+        }
+        if (own) owner[size_t(y) * W + x] = uint32_t(own - list.data());
+      }
+  }
+
+  // The footprints, filtered on the engine (or the CPU kernel): straight colour, linear.
+  engine::RebakeTexelsDesc desc;
+  desc.width = opt.width, desc.height = opt.height;
+  desc.source = src, desc.source_width = source.width, desc.source_height = source.height, desc.channels = source.channels;
+  desc.wrap_s = opt.wrap_s, desc.wrap_t = opt.wrap_t;
+  desc.premultiplied = premultiply;
+  desc.triangles = tris.data(), desc.triangle_count = tris.size();
+  desc.tile_start = start.data(), desc.tile_list = list.data();
+  desc.owner = owner.data();
+  std::vector<float> filtered(size_t(W) * H * C, 0.0f);
+  const auto t_sample = std::chrono::steady_clock::now();
+  if (engine) {
+    engine->rebake_texels(desc, filtered.data());
+  } else {
+    engine::rebake_texels_cpu(desc, filtered.data(), unsigned(std::max(1, omp_get_max_threads())));
+  }
+  const double sample_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_sample).count();
+
   Image out;
   out.width = opt.width, out.height = opt.height, out.channels = source.channels, out.bits = source.bits;
   out.pixels.assign(size_t(W) * H * C, 0.0f);
   std::vector<uint8_t> covered(size_t(W) * H, 0);
   const std::vector<float>& encode = encode_table();
-
-#pragma omp parallel
-  {
-    std::vector<double> acc(C), straight(C);
-#pragma omp for schedule(static)
-    for (int tile = 0; tile < tx * ty; ++tile) {
-      const int bx = (tile % tx) * T, by = (tile / tx) * T;
-      const uint32_t* first = list.data() + start[tile];
-      const uint32_t* last = list.data() + start[tile + 1];
-      if (first == last) continue;
-      for (int y = by; y < std::min(H, by + T); ++y)
-        for (int x = bx; x < std::min(W, bx + T); ++x) {
-          const double cx = x + 0.5, cy = y + 0.5;
-          const double box0[2] = {double(x), double(y)};
-          double best = std::numeric_limits<double>::infinity();
-          const Tri* owner = nullptr;
-          for (const uint32_t* it = first; it != last; ++it) {
-            const Tri& t = tris[*it];
-            if (t.hi[0] <= x || t.lo[0] >= x + 1 || t.hi[1] <= y || t.lo[1] >= y + 1) continue;
-            if (!triangle_overlaps_box(t.n[0], t.n[1], t.n[2], box0[0], box0[1], x + 1.0, y + 1.0, eps)) continue;
-            double qx, qy;
-            const double d = closest_point(t, cx, cy, qx, qy);
-            if (d < best) {
-              best = d, owner = &t;
-              if (d == 0) break;
-            }
-          }
-          if (!owner) continue;
-          const Tri& t = *owner;
-          // straight: colour un-premultiplied per texel (for footprints that are fully
-          // transparent, whose premultiplied colour is 0/0).
-          auto accumulate = [&](std::vector<double>& sum, bool straight) {
-            std::fill(sum.begin(), sum.end(), 0.0);
-            for (int j = 0; j < t.ns[1]; ++j)
-              for (int i = 0; i < t.ns[0]; ++i) {
-                const double px = x + (i + 0.5) / t.ns[0], py = y + (j + 0.5) / t.ns[1];
-                // The sample's own triangle: the owner, else the first candidate that
-                // contains it (a neighbour across an inner edge), else the owner's closest
-                // point (outside every chart: never read beyond the source chart).
-                const Tri* st = &t;
-                double qx, qy;
-                if (closest_point(t, px, py, qx, qy) > 0) {
-                  for (const uint32_t* it = first; it != last; ++it) {
-                    const Tri& u = tris[*it];
-                    if (&u == &t || px < u.lo[0] || px > u.hi[0] || py < u.lo[1] || py > u.hi[1]) continue;
-                    double rx, ry;
-                    if (closest_point(u, px, py, rx, ry) == 0) {
-                      st = &u, qx = px, qy = py;
-                      break;
-                    }
-                  }
-                }
-                const double dx = qx - st->n[0][0], dy = qy - st->n[0][1];
-                const double ox = st->o0[0] + st->J[0][0] * dx + st->J[0][1] * dy - 0.5;
-                const double oy = st->o0[1] + st->J[1][0] * dx + st->J[1][1] * dy - 0.5;
-                const double fx = std::floor(ox), fy = std::floor(oy);
-                const double wx = ox - fx, wy = oy - fy;
-                const int x0 = wrap(int(fx), SW, opt.wrap_s), x1 = wrap(int(fx) + 1, SW, opt.wrap_s);
-                const int y0 = wrap(int(fy), SH, opt.wrap_t), y1 = wrap(int(fy) + 1, SH, opt.wrap_t);
-                const float* p[4] = {src + (size_t(y0) * SW + x0) * C, src + (size_t(y0) * SW + x1) * C,
-                                     src + (size_t(y1) * SW + x0) * C, src + (size_t(y1) * SW + x1) * C};
-                const double w[4] = {(1 - wx) * (1 - wy), wx * (1 - wy), (1 - wx) * wy, wx * wy};
-                for (int k = 0; k < 4; ++k) {
-                  if (straight) {
-                    const double a = p[k][alpha];
-                    for (int c = 0; c < colour_channels; ++c) sum[c] += w[k] * (a > 0 ? p[k][c] / a : 0.0);
-                  } else {
-                    for (int c = 0; c < C; ++c) sum[c] += w[k] * p[k][c];
-                  }
-                }
-              }
-          };
-          accumulate(acc, false);
-          if (premultiply && !(acc[alpha] * (1.0 / (t.ns[0] * t.ns[1])) > 1e-7)) accumulate(straight, true);
-          const double inv = 1.0 / (t.ns[0] * t.ns[1]);
-          float* o = &out.pixels[(size_t(y) * W + x) * C];
-          if (normal) {
-            double n[3] = {acc[0] * inv * 2 - 1, acc[1] * inv * 2 - 1, C >= 3 ? acc[2] * inv * 2 - 1 : 0.0};
-            const double rx = t.Q[0][0] * n[0] + t.Q[0][1] * n[1];
-            const double ry = t.Q[1][0] * n[0] + t.Q[1][1] * n[1];
-            n[0] = rx, n[1] = ry;
-            if (C >= 3) {
-              const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-              if (len > 1e-12) n[0] /= len, n[1] /= len, n[2] /= len;
-            } else {
-              const double len = std::sqrt(n[0] * n[0] + n[1] * n[1]);
-              if (len > 1) n[0] /= len, n[1] /= len;
-            }
-            const int nc = std::min(C, 3);
-            for (int c = 0; c < nc; ++c) o[c] = float(std::clamp((n[c] + 1) * 0.5, 0.0, 1.0));
-            for (int c = nc; c < C; ++c) o[c] = float(std::clamp(acc[c] * inv, 0.0, 1.0));
-          } else {
-            const double a = has_alpha ? acc[alpha] * inv : 1.0;
-            for (int c = 0; c < colour_channels; ++c) {
-              double v = acc[c] * inv;
-              if (premultiply) v = a > 1e-7 ? v / a : straight[c] * inv;
-              float f = float(std::clamp(v, 0.0, 1.0));
-              if (linear) f = encode_fast(encode.data(), f);
-              o[c] = f;
-            }
-            if (has_alpha) o[alpha] = float(std::clamp(a, 0.0, 1.0));
-          }
-          covered[size_t(y) * W + x] = 1;
-        }
+#pragma omp parallel for schedule(static)
+  for (int64_t i = 0; i < int64_t(W) * H; ++i) {
+    if (owner[size_t(i)] == engine::kRebakeNoOwner) continue;
+    const auto& Q = rotation[list[owner[size_t(i)]]];
+    const float* f = &filtered[size_t(i) * C];
+    float* o = &out.pixels[size_t(i) * C];
+    if (normal) {
+      double n[3] = {double(f[0]) * 2 - 1, double(f[1]) * 2 - 1, C >= 3 ? double(f[2]) * 2 - 1 : 0.0};
+      const double rx = Q[0][0] * n[0] + Q[0][1] * n[1];
+      const double ry = Q[1][0] * n[0] + Q[1][1] * n[1];
+      n[0] = rx, n[1] = ry;
+      if (C >= 3) {
+        const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+        if (len > 1e-12) n[0] /= len, n[1] /= len, n[2] /= len;
+      } else {
+        const double len = std::sqrt(n[0] * n[0] + n[1] * n[1]);
+        if (len > 1) n[0] /= len, n[1] /= len;
+      }
+      const int nc = std::min(C, 3);
+      for (int c = 0; c < nc; ++c) o[c] = float(std::clamp((n[c] + 1) * 0.5, 0.0, 1.0));
+      for (int c = nc; c < C; ++c) o[c] = std::clamp(f[c], 0.0f, 1.0f);
+    } else {
+      for (int c = 0; c < colour_channels; ++c) {
+        float v = std::clamp(f[c], 0.0f, 1.0f);
+        if (linear) v = encode_fast(encode.data(), v);
+        o[c] = v;
+      }
+      if (has_alpha) o[alpha] = std::clamp(f[alpha], 0.0f, 1.0f);
     }
+    covered[size_t(i)] = 1;
   }
 
   size_t count = 0;
@@ -431,6 +359,7 @@ Image rebake(const Image& source, const std::vector<RebakeMesh>& meshes, const R
     stats->covered = count;
     stats->triangles = tris.size();
     stats->coverage = std::move(covered);
+    stats->sample_seconds = sample_seconds;
   }
   return out;
 }

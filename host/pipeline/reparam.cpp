@@ -309,7 +309,7 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
           ro.role = atlas::RebakeRole::Data;
         ro.wrap_s = use.wrap_s, ro.wrap_t = use.wrap_t;
       }
-      Image baked = atlas::rebake(source, meshes, ro);
+      Image baked = atlas::rebake(source, meshes, ro, nullptr, &engine);
       const std::vector<uint8_t> old_bytes = file.image_bytes[size_t(i)];
       file.image_bytes[size_t(i)] = io::encode_image(baked, format_of(old_bytes));
       old_texels += double(source.width) * source.height;
