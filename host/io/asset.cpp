@@ -47,6 +47,13 @@ class Reader {
     if (tinygltf::GetNumComponentsInType(uint32_t(a.type)) != width)
       fail(what + ": accessor " + std::to_string(index) + " has the wrong type");
     if (normalized) *normalized = a.normalized;
+    // Bounds before the allocation: a declared count must not size memory on its own.
+    if (a.count > kMaxElements) fail(what + ": accessor " + std::to_string(index) + " declares an implausible count (" + std::to_string(a.count) + ")");
+    if (a.bufferView >= 0) {
+      size_t stride, size = component_size(a.componentType);
+      if (size == 0) fail(what + ": unsupported component type " + std::to_string(a.componentType));
+      span(a.bufferView, a.byteOffset, a.count, size * size_t(width), &stride, what);
+    }
     std::vector<float> out(a.count * size_t(width), 0.0f);
     if (a.bufferView >= 0) read_elements(a, a.bufferView, a.byteOffset, a.count, width, what, out.data());
     if (a.sparse.isSparse) {
@@ -76,6 +83,15 @@ class Reader {
   const tinygltf::Model& model() const { return m_; }
 
  private:
+  static constexpr size_t kMaxElements = size_t(1) << 28;  // 268M vertices: beyond any real asset
+
+  static size_t component_size(int ct) {
+    return ct == TINYGLTF_COMPONENT_TYPE_FLOAT                                                          ? 4
+           : (ct == TINYGLTF_COMPONENT_TYPE_SHORT || ct == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT) ? 2
+           : (ct == TINYGLTF_COMPONENT_TYPE_BYTE || ct == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE)   ? 1
+                                                                                                   : 0;
+  }
+
   const tinygltf::Accessor& accessor(int index, const std::string& what) const {
     if (index < 0 || size_t(index) >= m_.accessors.size())
       fail(what + ": accessor " + std::to_string(index) + " does not exist");

@@ -76,6 +76,8 @@ GltfFile load_gltf(const std::string& path) {
   bool ok;
   if (looks_binary(bytes)) {
     if (bytes.size() < 20) throw InputError(path, "truncated .glb (shorter than its header)");
+    const uint32_t version = uint32_t(bytes[4]) | uint32_t(bytes[5]) << 8 | uint32_t(bytes[6]) << 16 | uint32_t(bytes[7]) << 24;
+    if (version != 2) throw InputError(path, "glTF binary container version " + std::to_string(version) + " is not 2");
     ok = loader.LoadBinaryFromMemory(&file.model, &err, &warn, bytes.data(), unsigned(bytes.size()), base_dir);
   } else {
     std::string ext = extension_of(path);

@@ -5,8 +5,12 @@
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
 
+#include <cstdio>
 #include <cstring>
+#include <fcntl.h>
 #include <memory>
+#include <mutex>
+#include <unistd.h>
 
 namespace uvpress::io {
 
@@ -35,6 +39,44 @@ std::string mime_of_format(const std::string& f) {
 
 namespace {
 
+// OpenImageIO's messages may span lines (libpng's are "...\nPNG read error: ..."); the user
+// gets one.
+std::string one_line(std::string s) {
+  while (!s.empty() && (s.back() == '\n' || s.back() == ' ')) s.pop_back();
+  for (size_t at; (at = s.find('\n')) != std::string::npos;) s.replace(at, 1, "; ");
+  return s.empty() ? "unreadable data" : s;
+}
+
+// libpng's default error handler (which OpenImageIO keeps) also prints each error on
+// stderr, while OpenImageIO returns the same text: keep stderr to one line per error by
+// sending fd 2 to /dev/null while a decoder runs. Serialized, since fd 2 is per process.
+class QuietStderr {
+ public:
+  QuietStderr() : lock_(mutex()) {
+    std::fflush(stderr);
+    saved_ = ::dup(2);
+    int null = ::open("/dev/null", O_WRONLY | O_CLOEXEC);
+    if (saved_ >= 0 && null >= 0) ::dup2(null, 2);
+    if (null >= 0) ::close(null);
+  }
+  ~QuietStderr() {
+    if (saved_ >= 0) {
+      ::dup2(saved_, 2);
+      ::close(saved_);
+    }
+  }
+  QuietStderr(const QuietStderr&) = delete;
+  QuietStderr& operator=(const QuietStderr&) = delete;
+
+ private:
+  static std::mutex& mutex() {
+    static std::mutex m;
+    return m;
+  }
+  std::lock_guard<std::mutex> lock_;
+  int saved_ = -1;
+};
+
 // Opens an in-memory PNG or JPEG; the proxy must outlive the input.
 std::unique_ptr<oiio::ImageInput> open_memory(const std::vector<uint8_t>& bytes, const std::string& name,
                                               oiio::Filesystem::IOMemReader& proxy, std::string& format) {
@@ -43,12 +85,20 @@ std::unique_ptr<oiio::ImageInput> open_memory(const std::vector<uint8_t>& bytes,
   if (format.empty()) throw InputError(name, "image is not PNG or JPEG (unrecognized data)");
   if (format != "png" && format != "jpeg")
     throw InputError(name, "image format " + format + " is not supported (PNG and JPEG are)");
+  if (format == "png" && bytes.size() >= 24 && std::memcmp(&bytes[12], "IHDR", 4) == 0) {
+    // The declared size, before a decoder reads (or allocates) anything.
+    auto be32 = [&](size_t at) { return uint32_t(bytes[at]) << 24 | uint32_t(bytes[at + 1]) << 16 | uint32_t(bytes[at + 2]) << 8 | bytes[at + 3]; };
+    const uint32_t w = be32(16), h = be32(20);
+    if (w > kMaxImageSide || h > kMaxImageSide)
+      throw InputError(name, "image declares " + std::to_string(w) + "x" + std::to_string(h) + ", larger than the supported " +
+                                 std::to_string(kMaxImageSide) + " per side");
+  }
   oiio::ImageSpec config;
   config.attribute("oiio:UnassociatedAlpha", 1);  // keep straight alpha as stored, no premultiply
   void* proxy_ptr = &proxy;
   config.attribute("oiio:ioproxy", oiio::TypeDesc::PTR, &proxy_ptr);
   auto in = oiio::ImageInput::open(format == "png" ? "memory.png" : "memory.jpg", &config, &proxy);
-  if (!in) throw InputError(name, "corrupt " + format + " image: " + oiio::geterror());
+  if (!in) throw InputError(name, "corrupt " + format + " image: " + one_line(oiio::geterror()));
   const oiio::ImageSpec& s = in->spec();
   if (s.width <= 0 || s.height <= 0 || s.nchannels <= 0 || s.nchannels > 4)
     throw InputError(name, "image has an invalid size or channel count");
@@ -64,6 +114,7 @@ uint32_t bits_of(const oiio::ImageSpec& s) { return s.format.size() >= 2 ? 16 : 
 
 ImageHeader read_image_header(const std::vector<uint8_t>& bytes, const std::string& name) {
   oiio::Filesystem::IOMemReader proxy(bytes.data(), bytes.size());
+  QuietStderr quiet;
   ImageHeader h;
   auto in = open_memory(bytes, name, proxy, h.format);
   const auto& s = in->spec();
@@ -73,6 +124,7 @@ ImageHeader read_image_header(const std::vector<uint8_t>& bytes, const std::stri
 
 Image decode_image(const std::vector<uint8_t>& bytes, const std::string& name) {
   oiio::Filesystem::IOMemReader proxy(bytes.data(), bytes.size());
+  QuietStderr quiet;
   std::string format;
   auto in = open_memory(bytes, name, proxy, format);
   const auto& s = in->spec();
@@ -82,7 +134,7 @@ Image decode_image(const std::vector<uint8_t>& bytes, const std::string& name) {
   image.pixels.resize(size_t(image.width) * image.height * image.channels);
   // Read as float: OIIO maps 8- and 16-bit unsigned values to [0,1] exactly (v / 255, v / 65535).
   if (!in->read_image(0, 0, 0, s.nchannels, oiio::TypeDesc::FLOAT, image.pixels.data()))
-    throw InputError(name, "corrupt " + format + " image: " + in->geterror());
+    throw InputError(name, "corrupt " + format + " image: " + one_line(in->geterror()));
   return image;
 }
 

@@ -1,0 +1,255 @@
+// uvpress batch: manifests, per-asset reports and summary, resume, shards, --jobs, and a
+// batch killed with SIGKILL mid-way then resumed.
+#include <catch2/catch.hpp>
+
+#include "io/gltf_io.h"
+#include "pipeline/batch.h"
+#include "pipeline/demo_asset.h"
+#include "support.h"
+
+#include <chrono>
+#include <csignal>
+#include <fcntl.h>
+#include <fstream>
+#include <map>
+#include <set>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <thread>
+
+extern char** environ;
+
+using namespace uvpress;
+using test::run_uvpress;
+using json = nlohmann::json;
+
+namespace {
+
+std::string quoted(const test::fs::path& p) { return "'" + p.string() + "'"; }
+
+json read_json(const test::fs::path& p) { return json::parse(std::ifstream(p)); }
+
+// `count` demo assets (different sizes, so different bytes) and a manifest listing them.
+std::vector<test::fs::path> write_assets(const test::fs::path& dir, int count, int grid = 6, int texture = 32) {
+  std::vector<test::fs::path> out;
+  test::fs::create_directories(dir / "in");
+  for (int k = 0; k < count; ++k) {
+    auto p = dir / "in" / ("asset" + std::to_string(k) + ".glb");
+    io::save_gltf(pipeline::make_demo_asset({grid + k, texture}), p.string());
+    out.push_back(p);
+  }
+  return out;
+}
+
+// Exit code of uvpress run with extra environment variables (shell words).
+int run_uvpress_env(const std::string& env, const std::string& args) {
+  int status = std::system((env + " " + UVPRESS_BINARY + " " + args + " >/dev/null 2>&1").c_str());
+  return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+}
+
+void write_manifest(const test::fs::path& file, const std::vector<std::string>& lines) {
+  std::ofstream m(file);
+  for (const auto& l : lines) m << l << "\n";
+}
+
+}  // namespace
+
+TEST_CASE("batch: manifest names, shards and the array-index variables", "[batch]") {
+  test::Scratch dir("batch-manifest");
+  write_manifest(dir / "m.txt", {"# comment", "", "a/x.glb", "  b/x.glb  ", "/abs/y.gltf", "z w.glb"});
+  auto items = pipeline::read_manifest((dir / "m.txt").string());
+  REQUIRE(items.size() == 4);
+  CHECK(items[0].input == (dir / "a/x.glb").string());
+  CHECK(items[1].input == (dir / "b/x.glb").string());
+  CHECK(items[2].input == "/abs/y.gltf");
+  CHECK(items[0].name == "x-1");
+  CHECK(items[1].name == "x-2");
+  CHECK(items[2].name == "y");
+  CHECK(items[3].name == "z_w");
+  auto s0 = pipeline::select_shard(items, 0, 3), s1 = pipeline::select_shard(items, 1, 3);
+  CHECK(s0.size() == 2);
+  CHECK(s0[1].position == 3);
+  CHECK(s1.size() == 1);
+  CHECK_THROWS_AS(pipeline::select_shard(items, 3, 3), std::invalid_argument);
+  write_manifest(dir / "empty.txt", {"# nothing"});
+  CHECK_THROWS(pipeline::read_manifest((dir / "empty.txt").string()));
+
+  auto env = [](std::map<std::string, std::string> vars) {
+    return [vars](const char* n) -> const char* {
+      auto it = vars.find(n);
+      return it == vars.end() ? nullptr : it->second.c_str();
+    };
+  };
+  auto slurm = pipeline::shard_from_environment(
+      env({{"SLURM_ARRAY_TASK_ID", "7"}, {"SLURM_ARRAY_TASK_MIN", "5"}, {"SLURM_ARRAY_TASK_COUNT", "4"}}));
+  CHECK(slurm.index == 2u);
+  CHECK(slurm.count == 4u);
+  auto k8s = pipeline::shard_from_environment(env({{"JOB_COMPLETION_INDEX", "3"}}));
+  CHECK(k8s.index == 3u);
+  CHECK_FALSE(k8s.count);
+  CHECK(pipeline::shard_from_environment(env({{"AWS_BATCH_JOB_ARRAY_INDEX", "0"}})).index == 0u);
+  CHECK_FALSE(pipeline::shard_from_environment(env({})).index);
+  CHECK_THROWS_AS(pipeline::shard_from_environment(env({{"JOB_COMPLETION_INDEX", "x1"}})), std::invalid_argument);
+}
+
+TEST_CASE("batch: reports, summary, one failure never stops the others, resume", "[batch][cli]") {
+  test::Scratch dir("batch-cli");
+  auto assets = write_assets(dir.path(), 3);
+  std::ofstream(dir / "in" / "broken.glb") << "glTF this is not";
+  write_manifest(dir / "list.txt", {"in/asset0.glb", "in/broken.glb", "in/asset1.glb", "in/asset2.glb"});
+  auto out = dir / "out";
+  const std::string cmd = "batch --manifest " + quoted(dir / "list.txt") + " -o " + quoted(out) + " --no-optimize --device cpu";
+
+  auto r = run_uvpress(cmd + " --report " + quoted(dir / "run.json"));
+  INFO(r.out << r.err);
+  CHECK(r.exit_code == 1);
+  CHECK_THAT(r.out, Catch::Contains("asset0") && Catch::Contains("broken") && Catch::Contains("FAILED"));
+  CHECK_THAT(r.out, Catch::Contains("4 assets: 3 ok, 0 skipped, 1 failed"));
+  CHECK_THAT(r.err, Catch::Contains("batch [4/4]"));
+  auto summary = read_json(out / "summary.json");
+  CHECK(summary == read_json(dir / "run.json"));
+  CHECK(summary["counts"]["ok"] == 3);
+  CHECK(summary["counts"]["failed"] == 1);
+  auto broken = read_json(out / "broken.report.json");
+  CHECK(broken["status"] == "failed");
+  CHECK_THAT(broken["error"].get<std::string>(), Catch::Contains("broken.glb"));
+  CHECK_FALSE(test::fs::exists(out / "broken.glb"));
+  for (int k = 0; k < 3; ++k) {
+    std::string name = "asset" + std::to_string(k);
+    auto rep = read_json(out / (name + ".report.json"));
+    CHECK(rep["status"] == "ok");
+    CHECK(rep["input_hash"] == pipeline::hash_asset(assets[size_t(k)].string()));
+    CHECK(rep["output_hash"] == pipeline::hash_asset((out / (name + ".glb")).string()));
+    CHECK(rep["reparam"]["cost_ratio"].get<double>() > 0);
+    CHECK(test::validate_gltf(out / (name + ".glb"))["numErrors"] == 0);
+  }
+
+  // Resume: the good ones are skipped, the broken one is retried.
+  r = run_uvpress(cmd);
+  CHECK(r.exit_code == 1);
+  CHECK_THAT(r.out, Catch::Contains("0 ok, 3 skipped, 1 failed"));
+  // A changed input is redone; so is every asset when the options change.
+  io::save_gltf(pipeline::make_demo_asset({9, 32}), assets[1].string());
+  r = run_uvpress(cmd);
+  CHECK_THAT(r.out, Catch::Contains("1 ok, 2 skipped, 1 failed"));
+  r = run_uvpress(cmd + " --cost 0.3 --jobs 2");
+  CHECK_THAT(r.out, Catch::Contains("3 ok, 0 skipped, 1 failed"));
+  CHECK(read_json(out / "asset0.report.json")["options"]["cost"] == 0.3);
+  // A corrupted output is redone, not trusted.
+  std::ofstream(out / "asset2.glb", std::ios::binary | std::ios::app) << "x";
+  r = run_uvpress(cmd + " --cost 0.3");
+  CHECK_THAT(r.out, Catch::Contains("1 ok, 2 skipped, 1 failed"));
+
+  // Usage errors exit 2.
+  CHECK(run_uvpress(cmd + " --shard-index 2 --shard-count 2").exit_code == 2);
+  CHECK(run_uvpress("batch -o x").exit_code == 2);
+  // A missing manifest is an input error naming it.
+  auto m = run_uvpress("batch --manifest " + quoted(dir / "nope.txt") + " -o " + quoted(out));
+  CHECK(m.exit_code == 1);
+  CHECK_THAT(m.err, Catch::Contains("nope.txt"));
+}
+
+TEST_CASE("batch: shards from flags and from SLURM_ARRAY_TASK_ID cover the manifest once, --collect merges", "[batch][cli]") {
+  test::Scratch dir("batch-shards");
+  write_assets(dir.path(), 3);
+  write_manifest(dir / "list.txt", {"in/asset0.glb", "in/asset1.glb", "in/asset2.glb"});
+  auto out = dir / "out";
+  const std::string base = "batch --manifest " + quoted(dir / "list.txt") + " -o " + quoted(out) + " --no-optimize --device cpu";
+  auto a = run_uvpress(base + " --shard-index 0 --shard-count 2");
+  CHECK(a.exit_code == 0);
+  auto s0 = read_json(out / "summary-shard-0-of-2.json");
+  CHECK(s0["assets"].size() == 2);
+  // One asset per index from the environment (no count: one asset per index).
+  CHECK(run_uvpress_env("SLURM_ARRAY_TASK_ID=1", base) == 0);
+  auto s1 = read_json(out / "summary-shard-1-of-3.json");
+  REQUIRE(s1["assets"].size() == 1);
+  CHECK(s1["assets"][0]["name"] == "asset1");
+  auto c = run_uvpress(base + " --collect");
+  CHECK(c.exit_code == 0);
+  auto all = read_json(out / "summary.json");
+  CHECK(all["counts"]["ok"] == 3);
+}
+
+TEST_CASE("batch: SIGKILL mid-way, then resume: every output complete and valid", "[batch][kill]") {
+  test::Scratch dir("batch-kill");
+  const int n = 8;
+  write_assets(dir.path(), n, 24, 512);
+  std::vector<std::string> lines;
+  for (int k = 0; k < n; ++k) lines.push_back("in/asset" + std::to_string(k) + ".glb");
+  write_manifest(dir / "list.txt", lines);
+  auto out = dir / "out";
+  const std::string manifest = (dir / "list.txt").string(), out_dir = out.string();
+
+  auto check_consistent = [&](const char* when) {
+    // Every output that exists loads whole; every "ok" report matches its output.
+    size_t ok = 0;
+    if (!test::fs::exists(out)) return ok;
+    for (auto& e : test::fs::directory_iterator(out)) {
+      auto name = e.path().filename().string();
+      INFO(when << ": " << name);
+      if (e.path().extension() == ".glb" && name[0] != '.') CHECK_NOTHROW(io::load_gltf(e.path().string()));
+      if (name.size() > 12 && name.substr(name.size() - 12) == ".report.json") {
+        auto rep = read_json(e.path());
+        if (rep["status"] == "ok") {
+          ++ok;
+          CHECK(rep["output_hash"] == pipeline::hash_asset(rep["output"].get<std::string>()));
+        }
+      }
+    }
+    return ok;
+  };
+
+  size_t kills = 0, done_at_kill = 0;
+  std::vector<size_t> done_after_kill;
+  for (int round = 0; round < 2; ++round) {
+    std::vector<std::string> args = {UVPRESS_BINARY, "batch", "--manifest", manifest, "-o", out_dir, "--no-optimize",
+                                     "--device", "cpu", "--jobs", round == 1 ? "2" : "1"};
+    std::vector<char*> argv;
+    for (auto& s : args) argv.push_back(s.data());
+    argv.push_back(nullptr);
+    posix_spawn_file_actions_t fa;
+    posix_spawn_file_actions_init(&fa);
+    posix_spawn_file_actions_addopen(&fa, 1, "/dev/null", O_WRONLY, 0);
+    posix_spawn_file_actions_addopen(&fa, 2, "/dev/null", O_WRONLY, 0);
+    pid_t pid;
+    REQUIRE(posix_spawn(&pid, UVPRESS_BINARY, &fa, nullptr, argv.data(), environ) == 0);
+    posix_spawn_file_actions_destroy(&fa);
+    // Kill once this round has finished one more asset, mid-way through the next.
+    const size_t before = check_consistent("before");
+    int status = 0;
+    bool exited = false;
+    for (int t = 0; t < 3000 && !exited; ++t) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+      if (waitpid(pid, &status, WNOHANG) == pid) exited = true;
+      else if (check_consistent("running") > before) break;
+    }
+    if (!exited) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(40 + 30 * round));
+      kill(pid, SIGKILL);
+      waitpid(pid, &status, 0);
+      ++kills;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));  // workers die with the batch
+    done_at_kill = check_consistent("after the kill");
+    if (!exited) done_after_kill.push_back(done_at_kill);
+  }
+  REQUIRE(kills >= 1);
+  CHECK(done_after_kill.front() < size_t(n));  // killed mid-way
+  // Resume to the end.
+  auto r = run_uvpress("batch --manifest " + quoted(test::fs::path(manifest)) + " -o " + quoted(out) + " --no-optimize --device cpu");
+  INFO(r.out << r.err);
+  CHECK(r.exit_code == 0);
+  auto summary = read_json(out / "summary.json");
+  CHECK(summary["counts"]["failed"] == 0);
+  CHECK(summary["counts"]["ok"].get<int>() + summary["counts"]["skipped"].get<int>() == n);
+  CHECK(summary["counts"]["skipped"].get<size_t>() >= done_at_kill);
+  CHECK(check_consistent("resumed") == size_t(n));
+  for (int k = 0; k < n; ++k) CHECK(test::validate_gltf(out / ("asset" + std::to_string(k) + ".glb"))["numErrors"] == 0);
+  size_t temporaries = 0;
+  for (auto& e : test::fs::directory_iterator(out)) temporaries += e.path().filename().string()[0] == '.';
+  std::string after;
+  for (size_t d : done_after_kill) after += (after.empty() ? "" : ", ") + std::to_string(d);
+  WARN("kill and resume: " << kills << " SIGKILLs (assets done after each: " << after << " of " << n << "), "
+                           << done_at_kill << "/" << n << " done before the resume, all " << n << " complete and valid after it; " << temporaries
+                           << " orphaned temporaries (never renamed into place)");
+}
