@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # Installs everything uvpress needs to build, test and run its demo on Debian bookworm:
 # Debian packages through apt-get (gnuplot-nox draws eval's plot; chromium lets the eval
-# HTML test load the report headless), and the Khronos glTF validator from npm into
+# HTML test load the report headless; slurmctld, slurmd and munge run the batch test's
+# one-node cluster on loopback; clang and libclang-rt-14-dev build the libFuzzer targets),
+# and the Khronos glTF validator from npm into
 # tools/node_modules (project-local, never global). Idempotent: when everything is
 # present it only checks and returns.
 set -euo pipefail
@@ -15,6 +17,8 @@ packages=(
   libopenimageio-dev openimageio-tools
   catch2 libcli11-dev libnlopt-cxx-dev
   gnuplot-nox chromium
+  slurmctld slurmd slurm-client munge
+  clang libclang-rt-14-dev
 )
 
 missing=()
