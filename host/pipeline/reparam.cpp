@@ -4,6 +4,7 @@
 #include "atlas/pack.h"
 #include "atlas/rebake.h"
 #include "core/error.h"
+#include "eval/eval.h"
 #include "io/asset.h"
 #include "io/gltf_append.h"
 #include "io/image_io.h"
@@ -112,6 +113,7 @@ bool has_tangents(const tinygltf::Model& m, const io::Primitive& p) {
 
 json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o, const Progress& progress) {
   const auto t_start = Clock::now();
+  const io::GltfFile original = o.max_gmsd > 0 ? file : io::GltfFile{};
   json report;
   json stages = json::object();
   json warnings = json::array();
@@ -254,7 +256,8 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
     std::vector<atlas::ChartShape> shapes(charts.size());
     for (size_t c = 0; c < charts.size(); ++c) shapes[c] = {charts[c].new_uv, charts[c].local};
     atlas::BudgetOptions budget;
-    budget.cost = o.cost, budget.size = o.size, budget.pot = o.power_of_two;
+    budget.cost = o.max_gmsd > 0 ? 1.0 : o.cost, budget.size = o.max_gmsd > 0 ? 0 : o.size;
+    budget.pot = o.power_of_two;
     budget.measure = atlas::CostMeasure::ImageTexels;  // --cost is about texture memory
     budget.pack.gutter = o.gutter, budget.pack.block = o.block;
     atlas::AtlasChoice choice = atlas::choose_atlas(shapes, driver.width, driver.height, old_used, budget);
@@ -341,6 +344,45 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
     jl["chart_cost_ratio"] = choice.cost_ratio;
     jl["flips"] = layout_flips;
     layout_reports.push_back(jl);
+  }
+
+  if (o.max_gmsd > 0 && !textures.empty()) {
+    // --max-gmsd: the cheapest point of the new layout's q-c curve that meets the bound.
+    auto t0 = Clock::now();
+    eval::EvalOptions eo;
+    eo.resolution = 256;
+    eo.artifacts = false;
+    eo.cost_grid = {0.05, 0.1, 0.15, 0.2, 0.25, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0};
+    json ev = eval::evaluate(original, {{"reparam", &file}}, engine, eo, nullptr,
+                             progress ? eval::Progress(progress) : eval::Progress());
+    const json& layout = ev["layouts"][1];
+    const double full_w = layout["full_size"][0].get<double>();
+    double ratio = 1, chosen_q = layout["curve"].back()["q"].get<double>(), chosen_c = 1;
+    bool met = false;
+    for (const auto& point : layout["curve"])
+      if (point["q"].get<double>() <= o.max_gmsd) {
+        ratio = std::min(1.0, point["width"].get<double>() / full_w);
+        chosen_q = point["q"].get<double>(), chosen_c = point["c_r"].get<double>();
+        met = true;
+        break;
+      }
+    if (!met) warnings.push_back("no size meets --max-gmsd " + std::to_string(o.max_gmsd) + "; kept the source density");
+    new_texels = 0;
+    for (auto& t : textures) {
+      const int i = t["image"].get<int>();
+      Image img = io::decode_image(file.image_bytes[size_t(i)], file.path);
+      const uint32_t w = std::max(1u, uint32_t(std::lround(img.width * ratio)));
+      const uint32_t h = std::max(1u, uint32_t(std::lround(img.height * ratio)));
+      if (w != img.width || h != img.height) {
+        const std::string format = format_of(file.image_bytes[size_t(i)]);
+        file.image_bytes[size_t(i)] = io::encode_image(eval::resize_area(img, w, h), format);
+      }
+      t["new_size"] = {w, h};
+      t["new_bytes"] = file.image_bytes[size_t(i)].size();
+      new_texels += double(w) * h;
+    }
+    report["max_gmsd"] = {{"bound", o.max_gmsd}, {"met", met}, {"c_r", chosen_c}, {"q", chosen_q}, {"scale", ratio}};
+    stages["max_gmsd_eval"] = seconds_since(t0);
   }
 
   stages["triangle_stage"] = t_triangle;

@@ -23,6 +23,11 @@ struct ReparamOptions {
   uint32_t gutter = 4;     // texels between charts and at the image edge
   uint32_t block = 1;      // chart alignment (4 for BCn)
   bool optimize = true;    // false: keep every Jacobian (identity), only repack and re-bake
+  // Instead of a cost: the smallest textures whose 20-view quality (eval, mean GMSD against
+  // the input) is at most this. The layout is made at the source density, evaluated on a
+  // cost grid, and its re-baked textures are area-filtered down to the cheapest size that
+  // meets the bound (gutters shrink with them). 0: off.
+  double max_gmsd = 0;
   perceptual::TriangleStageOptions triangle;
 };
 

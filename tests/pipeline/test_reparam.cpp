@@ -136,3 +136,23 @@ TEST_CASE("reparam keeps shared assets valid and leaves tiled and transformed la
     }
   }
 }
+
+TEST_CASE("reparam --max-gmsd: the cheapest size that meets the bound, tighter bounds cost more", "[pipeline][reparam]") {
+  auto engine = engine::make_cpu_engine({});
+  const io::GltfFile in = pipeline::make_demo_asset({16, 256});
+  auto run = [&](double bound) {
+    io::GltfFile out = in;
+    pipeline::ReparamOptions o;
+    o.max_gmsd = bound;
+    o.triangle.evaluations = 12;
+    o.triangle.view_size = 16;
+    auto report = pipeline::reparam(out, *engine, o);
+    INFO(report["max_gmsd"].dump());
+    CHECK(report["flips"] == 0);
+    if (report["max_gmsd"]["met"].get<bool>()) CHECK(report["max_gmsd"]["q"].get<double>() <= bound);
+    return report["textures"][0]["new_size"][0].get<uint32_t>();
+  };
+  const uint32_t loose = run(0.06), tight = run(0.02);
+  CHECK(loose < tight);
+  CHECK(loose < 256);
+}

@@ -63,9 +63,13 @@ void add_reparam(CLI::App& app, Globals& g) {
   auto* cost = cmd->add_option("--cost", o->cost, "Texels of the new textures relative to the old (0.5: half)")
                    ->capture_default_str()
                    ->check(CLI::Range(0.001, 1.0));
-  cmd->add_option("--size", o->size, "New size of the driving texture's longer side, instead of --cost")
-      ->check(CLI::Range(8u, 16384u))
-      ->excludes(cost);
+  auto* size = cmd->add_option("--size", o->size, "New size of the driving texture's longer side, instead of --cost")
+                   ->check(CLI::Range(8u, 16384u))
+                   ->excludes(cost);
+  cmd->add_option("--max-gmsd", o->max_gmsd, "Instead of --cost: the smallest textures whose 20-view GMSD is at most Q")
+      ->check(CLI::Range(1e-5, 0.5))
+      ->excludes(cost)
+      ->excludes(size);
   cmd->add_flag("--pot", o->power_of_two, "Power-of-two texture sizes");
   cmd->add_option("--gutter", o->gutter, "Texels between charts and at the edge")->capture_default_str()->check(CLI::Range(0u, 64u));
   cmd->add_option("--block-align", o->block, "Align charts to N x N blocks (4 for BCn)")->check(CLI::IsMember({1u, 4u}));
