@@ -237,7 +237,7 @@ std::string hash_asset(const std::string& path) {
 json options_json(const BatchOptions& o) {
   const auto& r = o.reparam;
   json j = {{"uvpress", o.version}, {"format", o.format}, {"cost", r.size ? json(nullptr) : json(r.cost)},
-            {"size", r.size}, {"pot", r.power_of_two}, {"gutter", r.gutter}, {"block", r.block},
+            {"size", r.size}, {"max_gmsd", r.max_gmsd}, {"pot", r.power_of_two}, {"gutter", r.gutter}, {"block", r.block},
             {"optimize", r.optimize}, {"epsilon", r.triangle.epsilon}, {"evaluations", r.triangle.evaluations},
             {"view_size", r.triangle.view_size}, {"seed", r.triangle.seed}, {"eval", o.eval}};
   if (o.eval) j["eval_options"] = {{"cost_grid", o.eval_options.cost_grid}, {"resolution", o.eval_options.resolution}};

@@ -79,6 +79,9 @@ void add_batch(CLI::App& app, Globals& g) {
   cmd->add_option("--size", o.reparam.size, "New size of the driving texture's longer side, instead of --cost")
       ->check(CLI::Range(8u, 16384u))
       ->excludes(cost);
+  cmd->add_option("--max-gmsd", o.reparam.max_gmsd, "Instead of --cost: the smallest textures whose 20-view GMSD is at most Q")
+      ->check(CLI::Range(1e-5, 0.5))
+      ->excludes(cost);
   cmd->add_flag("--pot", o.reparam.power_of_two, "Power-of-two texture sizes");
   cmd->add_option("--gutter", o.reparam.gutter, "Texels between charts and at the edge")->capture_default_str()->check(CLI::Range(0u, 64u));
   cmd->add_option("--block-align", o.reparam.block, "Align charts to N x N blocks (4 for BCn)")->check(CLI::IsMember({1u, 4u}));
