@@ -42,10 +42,13 @@ std::string one_line(std::string s) {
 
 // Keeps each image's encoded bytes instead of decoding them: uvpress decodes on demand
 // with OpenImageIO, and untouched images are written back byte for byte.
-bool keep_image_bytes(tinygltf::Image*, const int index, std::string*, std::string*, int, int,
+bool keep_image_bytes(tinygltf::Image* image, const int index, std::string*, std::string*, int, int,
                       const unsigned char* bytes, int size, void* user) {
   auto& store = *static_cast<std::vector<std::vector<uint8_t>>*>(user);
   if (index < 0) return false;
+  // tinygltf 2.7 hands over a bufferView's bytes without checking the view against its
+  // buffer (found by fuzzing: a heap over-read). Those are copied after loading, checked.
+  if (image && image->bufferView >= 0) return true;
   if (size_t(index) >= store.size()) store.resize(size_t(index) + 1);
   store[size_t(index)].assign(bytes, bytes + std::max(size, 0));
   return true;
@@ -94,6 +97,15 @@ GltfFile load_gltf(const std::string& path) {
 
   // tinygltf only warns about an image it could not read; for uvpress that is an error.
   file.image_bytes.resize(file.model.images.size());
+  for (size_t i = 0; i < file.model.images.size(); ++i) {
+    const int v = file.model.images[i].bufferView;
+    if (v < 0) continue;
+    const auto& view = file.model.bufferViews[size_t(v)];  // index checked by tinygltf
+    const auto& data = file.model.buffers[size_t(view.buffer)].data;
+    if (view.byteOffset > data.size() || view.byteLength > data.size() - view.byteOffset)
+      throw InputError(path, "image " + std::to_string(i) + ": bufferView " + std::to_string(v) + " lies outside its buffer");
+    file.image_bytes[i].assign(data.begin() + long(view.byteOffset), data.begin() + long(view.byteOffset + view.byteLength));
+  }
   for (size_t i = 0; i < file.model.images.size(); ++i) {
     if (!file.image_bytes[i].empty()) continue;
     const auto& image = file.model.images[i];
