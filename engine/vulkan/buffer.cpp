@@ -38,4 +38,12 @@ Buffer::~Buffer() {
   vkDestroyBuffer(context_.device(), buffer_, nullptr);
 }
 
+Buffer& reuse(Context& context, std::unique_ptr<Buffer>& slot, uint64_t bytes) {
+  if (!slot || slot->bytes() < bytes) {
+    slot.reset();  // free the old one first: two big buffers may not fit together
+    slot = std::make_unique<Buffer>(context, bytes);
+  }
+  return *slot;
+}
+
 }  // namespace uvpress::engine::vk

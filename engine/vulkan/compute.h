@@ -10,6 +10,7 @@
 #include <atomic>
 #include <cstdint>
 #include <initializer_list>
+#include <memory>
 
 namespace uvpress::engine::vk {
 
@@ -85,6 +86,10 @@ class Buffer {
   void* mapped_ = nullptr;
   uint64_t bytes_ = 0;
 };
+
+// The buffer in `slot`, replaced by a bigger one only when a call needs more than it holds:
+// buffers live across batches and rounds.
+Buffer& reuse(Context& context, std::unique_ptr<Buffer>& slot, uint64_t bytes);
 
 // A compute pipeline: `buffers` storage buffers at bindings 0..n-1, `push_bytes` of push
 // constants, the 2-D workgroup size as specialization constants 0 and 1.

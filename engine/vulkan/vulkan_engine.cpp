@@ -134,13 +134,7 @@ class MeshRenderer {
   }
 
  private:
-  vk::Buffer& buffer(std::unique_ptr<vk::Buffer>& slot, uint64_t bytes) {
-    if (!slot || slot->bytes() < bytes) {
-      slot.reset();
-      slot = std::make_unique<vk::Buffer>(context_, bytes);
-    }
-    return *slot;
-  }
+  vk::Buffer& buffer(std::unique_ptr<vk::Buffer>& slot, uint64_t bytes) { return vk::reuse(context_, slot, bytes); }
 
   vk::Context& context_;
   vk::Sequence& sequence_;
@@ -277,13 +271,7 @@ class Rebaker {
     return e;
   }
 
-  vk::Buffer& buffer(std::unique_ptr<vk::Buffer>& slot, uint64_t bytes) {
-    if (!slot || slot->bytes() < bytes) {
-      slot.reset();
-      slot = std::make_unique<vk::Buffer>(context_, bytes);
-    }
-    return *slot;
-  }
+  vk::Buffer& buffer(std::unique_ptr<vk::Buffer>& slot, uint64_t bytes) { return vk::reuse(context_, slot, bytes); }
 
   vk::Context& context_;
   vk::Sequence& sequence_;
@@ -477,13 +465,7 @@ class VulkanEngine final : public Engine {
   }
 
   // Keeps a buffer across calls and grows it only when a call needs more.
-  vk::Buffer& buffer(std::unique_ptr<vk::Buffer>& slot, uint64_t bytes) {
-    if (!slot || slot->bytes() < bytes) {
-      slot.reset();
-      slot = std::make_unique<vk::Buffer>(context_, bytes);
-    }
-    return *slot;
-  }
+  vk::Buffer& buffer(std::unique_ptr<vk::Buffer>& slot, uint64_t bytes) { return vk::reuse(context_, slot, bytes); }
 
   vk::Context context_;
   uint64_t max_buffer_;
