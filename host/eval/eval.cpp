@@ -164,15 +164,22 @@ struct Timing {
   double textures = 0, render = 0, gmsd = 0;
 };
 
-std::vector<float> luminance_render(engine::Engine& engine, const LayoutMesh& m, const Image& texture,
-                                    const std::vector<std::array<float, 16>>& cameras, uint32_t res, Timing& timing) {
-  std::vector<float> lum = perceptual::luminance_plane(texture);
+// The mesh and cameras of a layout as a render request (the caller adds the texture).
+engine::MeshRenderDesc render_desc(const LayoutMesh& m, const std::vector<std::array<float, 16>>& cameras,
+                                   uint32_t size) {
   engine::MeshRenderDesc d;
-  d.width = d.height = res;
+  d.width = d.height = size;
   d.cameras = cameras;
   d.positions = m.positions.data(), d.vertex_count = m.positions.size() / 3;
   d.indices = m.indices.data(), d.triangle_count = m.indices.size() / 3;
   d.uvs = m.uvs.data();
+  return d;
+}
+
+std::vector<float> luminance_render(engine::Engine& engine, const LayoutMesh& m, const Image& texture,
+                                    const std::vector<std::array<float, 16>>& cameras, uint32_t res, Timing& timing) {
+  std::vector<float> lum = perceptual::luminance_plane(texture);
+  engine::MeshRenderDesc d = render_desc(m, cameras, res);
   d.texture = lum.data(), d.texture_width = texture.width, d.texture_height = texture.height, d.channels = 1;
   d.repeat = m.repeat;
   const auto t0 = std::chrono::steady_clock::now();
@@ -214,12 +221,7 @@ std::pair<uint32_t, uint32_t> size_at(double c_r, double c_ref, double uv_area, 
 // A 5 x 4 sheet of RGB renders (values clamped to [0,1]).
 Image contact_sheet(engine::Engine& engine, const LayoutMesh& m, const Image& texture,
                     const std::vector<std::array<float, 16>>& cameras, uint32_t thumb) {
-  engine::MeshRenderDesc d;
-  d.width = d.height = thumb;
-  d.cameras = cameras;
-  d.positions = m.positions.data(), d.vertex_count = m.positions.size() / 3;
-  d.indices = m.indices.data(), d.triangle_count = m.indices.size() / 3;
-  d.uvs = m.uvs.data();
+  engine::MeshRenderDesc d = render_desc(m, cameras, thumb);
   d.texture = texture.pixels.data(), d.texture_width = texture.width, d.texture_height = texture.height, d.channels = 3;
   d.repeat = m.repeat;
   auto r = engine.render_mesh(d);
