@@ -135,6 +135,8 @@ constexpr uint32_t kNoMeshTriangle = 0xffffffffu;
 
 // Throws EngineError for a description that breaks the limits above.
 void check_mesh_render(const MeshRenderDesc& desc);
+// Checks `desc` and returns its result sized for every camera (coverage and pixels zeroed).
+MeshRenders sized_mesh_renders(const MeshRenderDesc& desc);
 
 // ---- Texture re-bake sampling (host/atlas/rebake.cpp; engine/cpu/rebake_texels.cpp) ----
 //

@@ -105,13 +105,19 @@ void shade_tile(const MeshRenderDesc& d, const ViewSetup& setup, uint32_t tx, ui
 
 }  // namespace mesh
 
-MeshRenders Engine::render_mesh(const MeshRenderDesc& d) {
+MeshRenders sized_mesh_renders(const MeshRenderDesc& d) {
   check_mesh_render(d);
   MeshRenders out;
   out.width = d.width, out.height = d.height, out.count = uint32_t(d.cameras.size()), out.channels = d.channels;
   const size_t n = size_t(d.width) * d.height;
   out.coverage.resize(n * out.count);
   out.pixels.resize(n * out.count * d.channels);
+  return out;
+}
+
+MeshRenders Engine::render_mesh(const MeshRenderDesc& d) {
+  MeshRenders out = sized_mesh_renders(d);
+  const size_t n = size_t(d.width) * d.height;
   const uint32_t tx = mesh::tiles_x(d), ty = mesh::tiles_y(d);
   std::vector<mesh::ViewSetup> setups(out.count);
   const unsigned threads = std::max(1u, device().backend == "cpu" ? device().threads : std::thread::hardware_concurrency());

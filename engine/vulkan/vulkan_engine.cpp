@@ -78,12 +78,8 @@ class MeshRenderer {
                 shader::kMeshTile) {}
 
   MeshRenders render(const MeshRenderDesc& d) {
-    check_mesh_render(d);
-    MeshRenders out;
-    out.width = d.width, out.height = d.height, out.count = uint32_t(d.cameras.size()), out.channels = d.channels;
+    MeshRenders out = sized_mesh_renders(d);
     const uint64_t n = uint64_t(d.width) * d.height;
-    out.coverage.resize(n * out.count);
-    out.pixels.resize(n * out.count * d.channels);
     if (out.count == 0) return out;
     const uint64_t tex_bytes = 4ull * d.texture_width * d.texture_height * d.channels;
     if (tex_bytes > max_buffer_)
