@@ -210,9 +210,11 @@ class Engine {
   // breaks the limits in shader/layout.h.
   virtual std::unique_ptr<ViewSet> prepare_views(const ViewSetDesc& desc) = 0;
   // GMSD of each candidate's least-squares bake against its view's reference. With
-  // `images`, also returns coverage, reference and candidate renders per candidate.
+  // `images`, also returns coverage, reference and candidate renders per candidate; with
+  // `lattice`, the candidate tile's texel spacing in J-mapped source texels (1: the loss of
+  // eq. 5-7 exactly; a power of two > 1: the tile had to be coarsened to fit kTileMax).
   virtual void score_views(ViewSet& views, const ViewCandidate* candidates, size_t count, float* gmsd,
-                           ViewImages* images = nullptr) = 0;
+                           ViewImages* images = nullptr, float* lattice = nullptr) = 0;
 
   // Whole-mesh renders (see MeshRenderDesc). The default is the CPU reference
   // (engine/cpu/render_mesh.cpp); the Vulkan backend runs render_mesh.comp.

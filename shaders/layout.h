@@ -21,29 +21,40 @@ struct ImageBatchPush {
 
 // ---- Per-triangle views (perceptual loss, seed paper 001 section 4.1.1, Appendix A) ----
 //
-// A view is an S x S orthographic render of one triangle and its one-ring. The host gives
-// every ring triangle in view space: screen vertices in pixels (x right, y down; pixel
-// (i, j) has its centre at (i + 0.5, j + 0.5)), and three affine planes over the screen,
+// A view is an S x S orthographic render of one triangle and its one-ring (or, for a
+// triangle too large in texels to resolve in one view, of one square patch of it: see
+// host/perceptual/triangle_view.h). The host gives every ring triangle in view space:
+// screen vertices in pixels (x right, y down; pixel (i, j) has its centre at
+// (i + 0.5, j + 0.5)), and three affine planes over the screen,
 // value(x, y) = c0 + c1 x + c2 y, for depth (larger is nearer the camera) and for the
 // source texel coordinates s, t (texel centres at integers: s = u W - 0.5, t = v H - 0.5).
+//
+// Ring triangles are grouped by chart: a neighbour across a UV seam lives elsewhere in the
+// texture, and in the re-parameterized atlas it will have its own texels, so the candidate
+// gets one least-squares region per group, each with J applied about the group's anchor (an
+// integer-valued texel position: J = I then keeps that group's texel lattice exactly).
 struct ViewTriangle {
   float xy[6];     // x0 y0 x1 y1 x2 y2, pixels; |x|, |y| <= kViewGuardBand
   float depth[3];  // plane coefficients
   float s[3];
   float t[3];
-  float pad;
+  float anchor_s;  // integer-valued texel coordinates J acts about, equal within a group
+  float anchor_t;
+  uint group;      // 0 for the view's own chart, < ViewDesc::group_count
+  uint pad0, pad1;
 };
 
 struct ViewDesc {
   uint first_triangle;  // into the ViewTriangle array; the view's own triangle comes first
   uint triangle_count;  // 1 + one-ring, at most kViewMaxTriangles
-  float center_s;       // integer-valued texel coordinates of the view's centre: candidate
-  float center_t;       // Jacobians act on (s, t) - centre, so J = I keeps the texel lattice
+  uint group_count;     // charts among the ring triangles, 1..kViewMaxGroups
+  uint pad;
 };
 
 // One candidate Jacobian (texel space, row-major: s' = j0 s + j1 t, t' = j2 s + j3 t) for
 // one view. The candidate texture is a tile of texels on the lattice of J-mapped source
-// texel coordinates, fitted by least squares to the view's reference render (eq. 11).
+// texel coordinates (one region per group, shelf-packed into the tile), fitted by least
+// squares to the view's reference render (eq. 11).
 struct ViewCandidate {
   float j[4];
   uint view;
@@ -144,9 +155,18 @@ struct RebakePush {
 constexpr uint kViewMaxSize = 64;         // S <= 64: GMSD works on a 32 x 32 shared tile
 constexpr uint kViewMaxTriangles = 64;    // 1 + one-ring
 constexpr uint kViewGuardBand = 511;      // |screen coordinate| bound: 4 sub-pixel bits keep edge functions in int32
-constexpr uint kTileMax = 32;             // candidate texture tile, texels per side
+// Candidate tile, texels per side: a view resolves its texels (at most one texel a pixel,
+// host/perceptual/triangle_view.h), so J (|J| <= 1) maps its S x S pixels into at most
+// S sqrt(2) texels a side, plus the bilinear footprint: 64 sqrt(2) + 3 < 96. A tile that would
+// still be larger (anisotropic UVs, groups that do not fit side by side) falls back to a
+// coarser power-of-two lattice, which the engine reports (score_views' `lattice`).
+constexpr uint kTileMax = 96;
+constexpr uint kViewMaxGroups = 8;        // charts in one view's ring
+// view_score.comp's scratch slot per candidate, 32-bit words: 4 per pixel (u, v, candidate,
+// group), 15 per tile texel (stencil 9, rhs, x, r, Ap, diagonal, p) plus p's zero padding.
+constexpr uint kViewScoreSlotWords = 4 * kViewMaxSize * kViewMaxSize + 14 * kTileMax * kTileMax + (kTileMax + 2) * (kTileMax + 2);
 constexpr uint kNoTriangle = 255;         // coverage value of an empty pixel
-static_assert(sizeof(ViewTriangle) == 64, "std430 layout");
+static_assert(sizeof(ViewTriangle) == 80, "std430 layout");
 static_assert(sizeof(ViewDesc) == 16, "std430 layout");
 static_assert(sizeof(ViewCandidate) == 32, "std430 layout");
 static_assert(sizeof(ViewPush) == 32, "push constant layout");
@@ -162,7 +182,8 @@ static_assert(sizeof(RebakePush) == 64, "push constant layout");
 #define kViewMaxSize 64u
 #define kViewMaxTriangles 64u
 #define kViewGuardBand 511u
-#define kTileMax 32u
+#define kTileMax 96u
+#define kViewMaxGroups 8u
 #define kNoTriangle 255u
 #define kMeshTile 16u
 #define kRebakeTile 16u

@@ -111,7 +111,8 @@ class CpuEngine final : public Engine {
     return set;
   }
 
-  void score_views(ViewSet& views, const ViewCandidate* c, size_t count, float* gmsd, ViewImages* images) override {
+  void score_views(ViewSet& views, const ViewCandidate* c, size_t count, float* gmsd, ViewImages* images,
+                   float* lattice) override {
     auto* set = dynamic_cast<CpuViewSet*>(&views);
     if (!set) throw EngineError("score_views: the view set belongs to another engine");
     const uint32_t S = set->desc.size;
@@ -135,7 +136,8 @@ class CpuEngine final : public Engine {
         local.resize(n);
         cand = local.data();
       }
-      gmsd[k] = cpu::score_view(set->desc.views[v], set->desc.triangles.data(), S, cov, ref, c[k].j, cand);
+      gmsd[k] = cpu::score_view(set->desc.views[v], set->desc.triangles.data(), S, cov, ref, c[k].j, cand,
+                                lattice ? lattice + k : nullptr);
     });
   }
 

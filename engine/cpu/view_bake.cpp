@@ -26,40 +26,64 @@ TileMap map_to_tile(const ViewDesc& view, const ViewTriangle* tris, uint32_t siz
                     const float j[4]) {
   TileMap m;
   std::vector<float> u, v;
-  float u_lo = INFINITY, u_hi = -INFINITY, v_lo = INFINITY, v_hi = -INFINITY;
+  std::vector<uint32_t> group;
+  const uint32_t groups = std::min(std::max(view.group_count, 1u), shader::kViewMaxGroups);
+  float lo_u[shader::kViewMaxGroups], hi_u[shader::kViewMaxGroups], lo_v[shader::kViewMaxGroups],
+      hi_v[shader::kViewMaxGroups];
+  std::fill(lo_u, lo_u + groups, INFINITY), std::fill(hi_u, hi_u + groups, -INFINITY);
+  std::fill(lo_v, lo_v + groups, INFINITY), std::fill(hi_v, hi_v + groups, -INFINITY);
   for (uint32_t p = 0; p < size * size; ++p) {
     if (coverage[p] == shader::kNoTriangle) continue;
     const ViewTriangle& t = tris[view.first_triangle + coverage[p]];
+    const uint32_t g = std::min(t.group, groups - 1);
     float cx = float(p % size) + 0.5f, cy = float(p / size) + 0.5f;
     float s = t.s[0] + t.s[1] * cx;
     s += t.s[2] * cy;
     float tt = t.t[0] + t.t[1] * cx;
     tt += t.t[2] * cy;
-    float ds = s - view.center_s, dt = tt - view.center_t;
+    float ds = s - t.anchor_s, dt = tt - t.anchor_t;
     float pu = j[0] * ds;
     pu += j[1] * dt;
     float pv = j[2] * ds;
     pv += j[3] * dt;
     m.pixel.push_back(p);
-    u.push_back(pu), v.push_back(pv);
-    u_lo = std::min(u_lo, pu), u_hi = std::max(u_hi, pu), v_lo = std::min(v_lo, pv), v_hi = std::max(v_hi, pv);
+    u.push_back(pu), v.push_back(pv), group.push_back(g);
+    lo_u[g] = std::min(lo_u[g], pu), hi_u[g] = std::max(hi_u[g], pu);
+    lo_v[g] = std::min(lo_v[g], pv), hi_v[g] = std::max(hi_v[g], pv);
   }
   if (m.pixel.empty()) return m;
-  // The tile never exceeds kTileMax texels a side: a coarser lattice (power of two, so the
-  // scaling is exact) for candidates whose footprint would be larger. Such a view cannot
-  // resolve texels finer than its pixels anyway.
-  float span = std::max(u_hi - u_lo, v_hi - v_lo), inv = 1.0f;
-  while (span * inv > float(shader::kTileMax - 3)) inv *= 0.5f;
+  // One region per group, shelf-packed left to right with a texel of gap (the membrane
+  // term couples regions only through it, negligibly). The lattice is J's own; only a
+  // layout that would exceed kTileMax texels a side takes a coarser power of two (exact
+  // scaling), and the caller is told through `lattice`.
+  float inv = 1.0f, ou[shader::kViewMaxGroups] = {}, ov[shader::kViewMaxGroups] = {};
+  float px[shader::kViewMaxGroups] = {}, py[shader::kViewMaxGroups] = {};
+  for (;;) {
+    uint32_t x = 0, y = 0, shelf = 0, width = 0;
+    for (uint32_t g = 0; g < groups; ++g) {
+      if (lo_u[g] > hi_u[g]) continue;  // no pixel of this group in the view
+      ou[g] = std::floor(lo_u[g] * inv), ov[g] = std::floor(lo_v[g] * inv);
+      const uint32_t w = uint32_t(std::floor(hi_u[g] * inv) - ou[g]) + 2;
+      const uint32_t h = uint32_t(std::floor(hi_v[g] * inv) - ov[g]) + 2;
+      if (x > 0 && x + w > shader::kTileMax) x = 0, y += shelf + 1, shelf = 0;
+      px[g] = float(x), py[g] = float(y);
+      x += w + 1, shelf = std::max(shelf, h), width = std::max(width, x - 1);
+    }
+    m.width = width, m.height = y + shelf;
+    if (m.width <= shader::kTileMax && m.height <= shader::kTileMax) break;
+    inv *= 0.5f;
+  }
   m.lattice = 1.0f / inv;
-  float ou = std::floor(u_lo * inv), ov = std::floor(v_lo * inv);
-  m.width = uint32_t(std::floor(u_hi * inv) - ou) + 2;
-  m.height = uint32_t(std::floor(v_hi * inv) - ov) + 2;
   m.a.resize(u.size()), m.b.resize(u.size());
-  for (size_t k = 0; k < u.size(); ++k) m.a[k] = u[k] * inv - ou, m.b[k] = v[k] * inv - ov;
+  for (size_t k = 0; k < u.size(); ++k) {
+    const uint32_t g = group[k];
+    float a = u[k] * inv - ou[g], b = v[k] * inv - ov[g];
+    m.a[k] = a + px[g], m.b[k] = b + py[g];
+  }
   return m;
 }
 
-std::vector<float> bake_tile(const TileMap& m, const float* reference, uint32_t* iterations) {
+std::vector<float> bake_tile(const TileMap& m, const float* reference, uint32_t* iterations, float* mean_out) {
   const uint32_t w = m.width, n = m.width * m.height;
   std::vector<float> x(n, 0.0f);
   if (iterations) *iterations = 0;
@@ -81,25 +105,34 @@ std::vector<float> bake_tile(const TileMap& m, const float* reference, uint32_t*
       for (int q = 0; q < 4; ++q) K[size_t(row) * 9 + slot(di[q] - di[p], dj[q] - dj[p])] += fixed(wt[p] * wt[q]);
     }
   }
+  // A texel no pixel sees is left out (an identity row, x = 0): it cannot change the
+  // render, and left in it would only add the membrane's smooth, nearly singular modes.
+  std::vector<uint8_t> seen(n);
+  uint32_t seen_count = 0;
+  for (uint32_t t = 0; t < n; ++t) seen[t] = K[size_t(t) * 9 + 4] != 0, seen_count += seen[t];
   const float count = float(m.pixel.size());
   const float mean = float(ref_sum) / (kFixedPoint * count);
-  const float mu = kSmoothness * count / float(n);
-  // A = K / Q + mu L (L the tile's 4-neighbour graph Laplacian); b = R / Q - mean rowsum(K) / Q.
+  const float mu = kSmoothness * count / float(std::max(seen_count, 1u));
+  // A = K / Q + mu L (L the 4-neighbour graph Laplacian of the seen texels);
+  // b = R / Q - mean rowsum(K) / Q.
   std::vector<float> A(size_t(n) * 9), diag(n), r(n), z(n), p(n), Ap(n);
   const float inv_q = 1.0f / kFixedPoint;
   for (uint32_t t = 0; t < n; ++t) {
     int32_t rowsum = 0;
     for (uint32_t s = 0; s < 9; ++s) {
-      A[size_t(t) * 9 + s] = float(K[size_t(t) * 9 + s]) * inv_q;
-      rowsum += K[size_t(t) * 9 + s];
+      const int32_t k = seen[t] ? K[size_t(t) * 9 + s] : 0;
+      A[size_t(t) * 9 + s] = float(k) * inv_q;
+      rowsum += k;
     }
+    if (!seen[t]) A[size_t(t) * 9 + 4] = 1.0f;
     const uint32_t ti = t % w, tj = t / w;
-    const bool nb[4] = {ti > 0, ti + 1 < w, tj > 0, tj + 1 < m.height};  // left right up down
+    const bool nb[4] = {ti > 0 && seen[t - 1], ti + 1 < w && seen[t + 1], tj > 0 && seen[t - w],
+                        tj + 1 < m.height && seen[t + w]};  // left right up down
     const uint32_t nb_slot[4] = {slot(-1, 0), slot(1, 0), slot(0, -1), slot(0, 1)};
     for (int e = 0; e < 4; ++e)
-      if (nb[e]) A[size_t(t) * 9 + 4] += mu, A[size_t(t) * 9 + nb_slot[e]] -= mu;
+      if (seen[t] && nb[e]) A[size_t(t) * 9 + 4] += mu, A[size_t(t) * 9 + nb_slot[e]] -= mu;
     diag[t] = A[size_t(t) * 9 + 4];
-    float bt = float(R[t]) * inv_q;
+    float bt = seen[t] ? float(R[t]) * inv_q : 0.0f;
     bt -= mean * (float(rowsum) * inv_q);
     r[t] = bt;
   }
@@ -144,11 +177,15 @@ std::vector<float> bake_tile(const TileMap& m, const float* reference, uint32_t*
     }
   }
   if (iterations) *iterations = it;
+  if (mean_out) {
+    *mean_out = mean;
+    return x;
+  }
   for (auto& v : x) v += mean;
   return x;
 }
 
-void render_tile(const TileMap& m, const std::vector<float>& tile, uint32_t size, float* candidate) {
+void render_tile(const TileMap& m, const std::vector<float>& tile, uint32_t size, float* candidate, float offset) {
   std::fill(candidate, candidate + size_t(size) * size, 0.0f);
   for (size_t k = 0; k < m.pixel.size(); ++k) {
     float a = m.a[k], b = m.b[k];
@@ -162,14 +199,17 @@ void render_tile(const TileMap& m, const std::vector<float>& tile, uint32_t size
     bottom += fa * t1[1];
     float v = (1.0f - fb) * top;
     v += fb * bottom;
-    candidate[m.pixel[k]] = v;
+    candidate[m.pixel[k]] = v + offset;
   }
 }
 
 float score_view(const ViewDesc& view, const ViewTriangle* tris, uint32_t size, const uint8_t* coverage,
-                 const float* reference, const float j[4], float* candidate) {
+                 const float* reference, const float j[4], float* candidate, float* lattice) {
   TileMap m = map_to_tile(view, tris, size, coverage, j);
-  render_tile(m, bake_tile(m, reference), size, candidate);
+  float mean = 0;
+  const std::vector<float> x = bake_tile(m, reference, nullptr, &mean);
+  render_tile(m, x, size, candidate, mean);
+  if (lattice) *lattice = m.lattice;
   return gmsd<float>(reference, candidate, size, size);
 }
 

@@ -22,9 +22,13 @@ void rasterize_view(const ViewDesc& view, const ViewTriangle* triangles, uint32_
 
 // Where each covered pixel lands in a candidate's texture tile: tile coordinates (a, b)
 // with texel (i, j) at integer (i, j); the tile is `width` x `height` <= kTileMax squared.
+// Pixel q of ring triangle k maps to J ((s, t)_q - anchor_k) in its group's region; the
+// regions (one per group, each its J-mapped bounding box plus the bilinear footprint) are
+// laid out on shelves of kTileMax texels with one texel between them.
 struct TileMap {
   uint32_t width = 0, height = 0;
-  float lattice = 1;           // tile texel spacing in J-mapped source texels (a power of two)
+  float lattice = 1;           // tile texel spacing in J-mapped source texels: 1, or a power of
+                               // two when the regions would not fit in kTileMax (not faithful)
   std::vector<uint32_t> pixel;  // covered pixel indices, in raster order
   std::vector<float> a, b;     // their tile coordinates
 };
@@ -38,7 +42,7 @@ constexpr float kFixedPoint = 65536.0f;
 // mu sum_edges (T_i - T_j)^2 over the tile's 4-neighbour edges makes A^T A definite and
 // fills texels no pixel sees from their neighbours (a pull towards a constant would bias
 // the weakly seen texels at the coverage border instead).
-constexpr float kSmoothness = 1e-5f;
+constexpr float kSmoothness = 1e-4f;
 // Preconditioned CG stops at ||r|| <= kBakeTolerance ||b|| or after kBakeMaxIterations.
 constexpr float kBakeTolerance = 1e-5f;
 constexpr uint32_t kBakeMaxIterations = 200;
@@ -46,14 +50,17 @@ constexpr uint32_t kBakeMaxIterations = 200;
 // The least-squares bake (eq. 11) with the membrane term:
 //   min_T sum_q (sum_k w_qk T_k - ref_q)^2 + mu sum_(i,j) (T_i - T_j)^2,
 // solved for T - m (m the mean reference luminance, the starting guess). Returns the tile
-// texels T (width * height).
-std::vector<float> bake_tile(const TileMap& map, const float* reference, uint32_t* iterations = nullptr);
+// texels T (width * height), or with `mean` the solution T - m and m there.
+std::vector<float> bake_tile(const TileMap& map, const float* reference, uint32_t* iterations = nullptr,
+                             float* mean = nullptr);
 
-// Bilinear render of `tile` at the mapped pixels; empty pixels stay 0.
-void render_tile(const TileMap& map, const std::vector<float>& tile, uint32_t size, float* candidate);
+// Bilinear render of `tile` at the mapped pixels, plus `offset`; empty pixels stay 0.
+void render_tile(const TileMap& map, const std::vector<float>& tile, uint32_t size, float* candidate,
+                 float offset = 0);
 
-// Everything for one candidate: map, bake, render, GMSD against the reference.
+// Everything for one candidate: map, bake, render, GMSD against the reference; the tile's
+// lattice spacing in `lattice` when given.
 float score_view(const ViewDesc& view, const ViewTriangle* triangles, uint32_t size, const uint8_t* coverage,
-                 const float* reference, const float j[4], float* candidate);
+                 const float* reference, const float j[4], float* candidate, float* lattice = nullptr);
 
 }  // namespace uvpress::engine::cpu

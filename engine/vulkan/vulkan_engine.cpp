@@ -29,22 +29,25 @@ using shader::ImageBatchPush;
 using shader::ViewPush;
 
 // Words of view_score.comp's scratch slot per candidate (its OFF_* layout).
-constexpr uint64_t kScoreSlotBytes =
-    4ull * (3 * shader::kViewMaxSize * shader::kViewMaxSize + 11 * shader::kTileMax * shader::kTileMax);
+constexpr uint64_t kScoreSlotBytes = 4ull * shader::kViewScoreSlotWords;
 constexpr uint32_t kScoreChunk = 1024;  // candidates per submit, at most
 constexpr uint32_t kWorkgroup = 256;
 
 // Workgroup size of the one-workgroup-per-item kernels (view_score, gmsd): a multiple of 8.
 // GPUs want many invocations; lavapipe runs a workgroup on one thread, 8 lanes at a time,
 // and switches between its 8-lane slices at every barrier, so there the smallest
-// workgroup (one slice, 8) is fastest. UVPRESS_VIEW_WORKGROUP overrides (benchmarks).
+// workgroup (one slice, 8) was fastest. But lavapipe 22.3 mis-ran view_score with 8 and
+// 16 invocations once its tiles grew past 32 texels (a two-chart view at J = I rendered
+// no pixel; the CPU oracle and 32+ invocations agree): CPU devices take 32 (not root-
+// caused; tests/engine/test_views.cpp's seam case catches it). UVPRESS_VIEW_WORKGROUP
+// overrides (benchmarks).
 uint32_t item_workgroup(const vk::Context& context) {
   if (const char* e = std::getenv("UVPRESS_VIEW_WORKGROUP")) {
     const long v = std::strtol(e, nullptr, 10);
     if (v >= 8 && v <= 1024 && v % 8 == 0) return uint32_t(v);
     throw EngineError("UVPRESS_VIEW_WORKGROUP must be a multiple of 8 in 8..1024");
   }
-  return context.info().type == "cpu" ? 8 : kWorkgroup;
+  return context.info().type == "cpu" ? 32 : kWorkgroup;
 }
 
 // A view set on the device: descriptors and triangles whole, coverage and reference
@@ -394,7 +397,8 @@ class VulkanEngine final : public Engine {
     return set;
   }
 
-  void score_views(ViewSet& views, const ViewCandidate* c, size_t count, float* gmsd, ViewImages* images) override {
+  void score_views(ViewSet& views, const ViewCandidate* c, size_t count, float* gmsd, ViewImages* images,
+                   float* lattice) override {
     auto* set = dynamic_cast<VulkanViewSet*>(&views);
     if (!set) throw EngineError("score_views: the view set belongs to another engine");
     const uint32_t S = set->size_;
@@ -409,7 +413,7 @@ class VulkanEngine final : public Engine {
     const uint32_t chunk = uint32_t(std::min<uint64_t>({kScoreChunk, count, max_buffer_ / kScoreSlotBytes}));
     vk::Buffer& cand = buffer(candidates_, sizeof(ViewCandidate) * chunk);
     vk::Buffer& scratch = buffer(scratch_, kScoreSlotBytes * chunk);
-    vk::Buffer& results = buffer(results_, 4ull * chunk);
+    vk::Buffer& results = buffer(results_, 8ull * chunk);  // gmsd, lattice
     for (const auto& page : set->pages) {
       // This page's candidates, in input order.
       std::vector<uint32_t> mine;
@@ -427,7 +431,8 @@ class VulkanEngine final : public Engine {
         sequence_.submit_and_wait();
         for (uint32_t k = 0; k < n; ++k) {
           const uint32_t out = mine[first + k];
-          gmsd[out] = results.data<float>()[k];
+          gmsd[out] = results.data<float>()[2 * k];
+          if (lattice) lattice[out] = results.data<float>()[2 * k + 1];
           if (!images) continue;
           const uint32_t local = c[out].view - page.first;
           std::memcpy(&images->coverage[out * pixels], page.coverage->data<uint8_t>() + local * pixels, pixels);

@@ -33,12 +33,15 @@ double seconds_since(Clock::time_point t) { return std::chrono::duration<double>
 
 // One triangle's optimization state.
 struct Search {
-  uint32_t triangle = 0, view = 0;
+  uint32_t triangle = 0;
+  uint32_t first_view = 0, views = 1;  // its views in the wave's view set
   double area = 0;  // |T| in texels
   std::unique_ptr<bo::BayesOpt> bo;
   double x[4] = {0, 0, 0, 0};  // pending proposal
   double best_f = std::numeric_limits<double>::infinity(), best_g = 0;
   double best_x[4] = {0, 1, 1, 0};
+  double identity_g = -1;   // measured at the first evaluation (the identity)
+  float identity_lattice = 1;
   int last_improvement = 0;
   bool done = false;
 };
@@ -68,6 +71,7 @@ double acquisition(const Search& s, const double* x, double mean, double sd, con
 }
 
 void record(Search& s, const double x[4], double g, int evaluation, const TriangleStageOptions& o) {
+  if (evaluation == 1) s.identity_g = g;
   s.bo->observe(x, std::log(std::max(double(g), 0.0) + kGmsdFloor));
   double f = objective(s, x, g, o);
   if (f < s.best_f) {
@@ -79,9 +83,19 @@ void record(Search& s, const double x[4], double g, int evaluation, const Triang
   if (n >= o.evaluations || (o.early_stop && n >= 30 && n - s.last_improvement >= 25)) s.done = true;
 }
 
-engine::ViewCandidate candidate_of(const Search& s, const double x[4], double lambda_min) {
+// One candidate per view of the triangle.
+void append_candidates(const Search& s, const double x[4], double lambda_min, std::vector<engine::ViewCandidate>& out) {
   auto j = jacobian_of(x, lambda_min);
-  return {{float(j[0]), float(j[1]), float(j[2]), float(j[3])}, s.view, 0, 0, 0};
+  for (uint32_t v = 0; v < s.views; ++v)
+    out.push_back({{float(j[0]), float(j[1]), float(j[2]), float(j[3])}, s.first_view + v, 0, 0, 0});
+}
+
+// A triangle's loss from its views' scores: the RMS of their GMSD (one view: its GMSD).
+double combine(const float* scores, uint32_t views) {
+  if (views == 1) return scores[0];
+  double sum = 0;
+  for (uint32_t v = 0; v < views; ++v) sum += double(scores[v]) * scores[v];
+  return std::sqrt(sum / views);
 }
 
 std::array<double, 4> rotation(double a) { return {std::cos(a), -std::sin(a), std::sin(a), std::cos(a)}; }
@@ -138,17 +152,20 @@ std::vector<TriangleResult> optimize_triangles(engine::Engine& engine, const Tri
     const size_t wave_end = std::min(all.size(), wave_start + o.wave);
     std::vector<uint32_t> wave(all.begin() + long(wave_start), all.begin() + long(wave_end));
     auto t0 = Clock::now();
-    engine::ViewSetDesc desc = make_triangle_views(input, o.view_size, wave);
+    TriangleViews tv = make_triangle_views(input, o.view_size, wave, o.max_patches);
+    engine::ViewSetDesc& desc = tv.desc;
     desc.texture = texture.data(), desc.texture_width = input.texture_width, desc.texture_height = input.texture_height;
     local.host_seconds += seconds_since(t0);
     t0 = Clock::now();
     auto views = engine.prepare_views(desc);
     local.device_seconds += seconds_since(t0);
+    local.views += desc.views.size();
 
     std::vector<Search> searches(wave.size());
     for (size_t k = 0; k < wave.size(); ++k) {
       Search& s = searches[k];
-      s.triangle = wave[k], s.view = uint32_t(k), s.area = texel_area(input, wave[k]);
+      s.triangle = wave[k], s.area = texel_area(input, wave[k]);
+      s.first_view = tv.first_view[k], s.views = tv.first_view[k + 1] - tv.first_view[k];
       bo::BoOptions bo_options;
       bo_options.dim = 4, bo_options.initial = o.initial;
       bo_options.seed = o.seed * 1000003ull + wave[k];  // per triangle: independent of waves and threads
@@ -161,45 +178,62 @@ std::vector<TriangleResult> optimize_triangles(engine::Engine& engine, const Tri
     // and proposes for the other (when `overlap`).
     std::vector<size_t> halves[2];
     for (size_t k = 0; k < searches.size(); ++k) halves[k % 2].push_back(k);
-    auto propose = [&](std::vector<size_t>& half, std::vector<engine::ViewCandidate>& batch) {
+    // Per half: the proposals' candidates (every view of every triangle, in half order) and
+    // where each triangle's candidates start.
+    struct Batch {
+      std::vector<engine::ViewCandidate> candidates;
+      std::vector<uint32_t> start;
+      std::vector<float> scores, lattice;
+    };
+    auto propose = [&](std::vector<size_t>& half, Batch& batch) {
       half.erase(std::remove_if(half.begin(), half.end(), [&](size_t k) { return searches[k].done; }), half.end());
-      batch.resize(half.size());
 #pragma omp parallel for schedule(dynamic, 1)
       for (long i = 0; i < long(half.size()); ++i) {
         Search& s = searches[half[size_t(i)]];
         s.bo->propose([&](const double* x, double m, double sd) { return acquisition(s, x, m, sd, o); }, s.x);
-        batch[size_t(i)] = candidate_of(s, s.x, o.lambda_min);
       }
+      batch.candidates.clear(), batch.start.clear();
+      for (size_t k : half) {
+        batch.start.push_back(uint32_t(batch.candidates.size()));
+        append_candidates(searches[k], searches[k].x, o.lambda_min, batch.candidates);
+      }
+      batch.start.push_back(uint32_t(batch.candidates.size()));
     };
-    auto update = [&](const std::vector<size_t>& half, const std::vector<float>& scores) {
+    auto update = [&](const std::vector<size_t>& half, const Batch& batch) {
 #pragma omp parallel for schedule(dynamic, 1)
       for (long i = 0; i < long(half.size()); ++i) {
         Search& s = searches[half[size_t(i)]];
-        record(s, s.x, scores[size_t(i)], int(s.bo->evaluations()) + 1, o);
+        const uint32_t first = batch.start[size_t(i)];
+        const int evaluation = int(s.bo->evaluations()) + 1;
+        if (evaluation == 1)
+          s.identity_lattice = *std::max_element(batch.lattice.begin() + first, batch.lattice.begin() + first + s.views);
+        record(s, s.x, combine(&batch.scores[first], s.views), evaluation, o);
       }
     };
-    auto score_async = [&](const std::vector<engine::ViewCandidate>& batch, std::vector<float>& scores) {
-      scores.resize(batch.size());
-      return std::async(overlap ? std::launch::async : std::launch::deferred, [&engine, &views, &batch, &scores] {
+    auto score_async = [&](Batch& batch) {
+      batch.scores.resize(batch.candidates.size()), batch.lattice.resize(batch.candidates.size());
+      return std::async(overlap ? std::launch::async : std::launch::deferred, [&engine, &views, &batch] {
         auto t = Clock::now();
-        if (!batch.empty()) engine.score_views(*views, batch.data(), batch.size(), scores.data());
+        if (!batch.candidates.empty())
+          engine.score_views(*views, batch.candidates.data(), batch.candidates.size(), batch.scores.data(), nullptr,
+                             batch.lattice.data());
         return seconds_since(t);
       });
     };
 
-    std::vector<engine::ViewCandidate> batch[2];
-    std::vector<float> scores[2];
+    Batch batch[2];
     t0 = Clock::now();
     propose(halves[0], batch[0]);
     local.host_seconds += seconds_since(t0);
     while (!halves[0].empty() || !halves[1].empty()) {
       for (int h = 0; h < 2; ++h) {
         // batch[h] is proposed; score it while the other half is updated and proposed.
-        auto pending = score_async(batch[h], scores[h]);
-        local.evaluations += batch[h].size();
+        auto pending = score_async(batch[h]);
+        local.evaluations += batch[h].start.empty() ? 0 : batch[h].start.size() - 1;
+        local.view_scores += batch[h].candidates.size();
         t0 = Clock::now();
         const int other = 1 - h;
-        if (!batch[other].empty()) update(halves[other], scores[other]);
+        if (!batch[other].candidates.empty()) update(halves[other], batch[other]);
         propose(halves[other], batch[other]);
         local.host_seconds += seconds_since(t0);
         local.device_seconds += pending.get();
@@ -214,39 +248,58 @@ std::vector<TriangleResult> optimize_triangles(engine::Engine& engine, const Tri
       if (halves[0].empty() && halves[1].empty()) break;
     }
 
-    // Results, then the weights of eq. 17 as one more engine batch.
+    // Results: the best feasible point, or, when no evaluation met eps, the identity with
+    // its measured loss and `feasible` false (never a default passed off as measured).
+    // Then the weights of eq. 17 as one more engine batch.
     std::vector<engine::ViewCandidate> weight_batch;
     const int K = o.weight_samples;
     for (size_t k = 0; k < searches.size(); ++k) {
       Search& s = searches[k];
       TriangleResult& r = results[wave_start + k];
+      r.feasible = std::isfinite(s.best_f);
+      if (!r.feasible) {
+        const double identity[4] = {0, 1, 1, 0};
+        std::copy(identity, identity + 4, s.best_x);
+        s.best_g = s.identity_g;
+      }
       auto j = jacobian_of(s.best_x, o.lambda_min, &r.alpha, &r.lambda1, &r.lambda2, &r.beta);
       r.jacobian = j;
       r.rotation = rotation(r.alpha);
       r.stretch = multiply(multiply(rotation(r.beta), {r.lambda1, 0, 0, r.lambda2}), rotation(-r.beta));
       r.gmsd = s.best_g, r.objective = s.best_f, r.texel_area = s.area;
+      r.identity_gmsd = s.identity_g;
+      r.identity_lattice = s.identity_lattice;
+      r.views = int(s.views);
+      r.complete = tv.complete[k] != 0;
+      r.texels_per_pixel = 0;
+      for (uint32_t v = 0; v < s.views; ++v)
+        r.texels_per_pixel = std::max(r.texels_per_pixel, double(tv.texels_per_pixel[s.first_view + v]));
       r.evaluations = int(s.bo->evaluations());
       for (int q = 0; q < K; ++q) {  // alpha swept, the rest at the optimum
         double x[4] = {(q + 0.5) / K, s.best_x[1], s.best_x[2], s.best_x[3]};
-        weight_batch.push_back(candidate_of(s, x, o.lambda_min));
+        append_candidates(s, x, o.lambda_min, weight_batch);
       }
       double shift[3] = {0.5, 0.5, 0.5};
       for (int q = 0; q < K; ++q) {  // lambda1, lambda2, beta swept (Halton), alpha at the optimum
         double h[3];
         bo::halton(uint64_t(q) + 1, 3, shift, h);
         double x[4] = {s.best_x[0], h[0], h[1], h[2]};
-        weight_batch.push_back(candidate_of(s, x, o.lambda_min));
+        append_candidates(s, x, o.lambda_min, weight_batch);
       }
     }
     std::vector<float> weight_scores(weight_batch.size());
     t0 = Clock::now();
     engine.score_views(*views, weight_batch.data(), weight_batch.size(), weight_scores.data());
     local.device_seconds += seconds_since(t0);
-    local.evaluations += weight_batch.size();
+    local.view_scores += weight_batch.size();
+    size_t at = 0;
     for (size_t k = 0; k < searches.size(); ++k) {
-      auto first = weight_scores.begin() + long(k) * 2 * K;
-      results[wave_start + k].weight_rotation = variance(std::vector<float>(first, first + K));
-      results[wave_start + k].weight_stretch = variance(std::vector<float>(first + K, first + 2 * K));
+      const uint32_t nv = searches[k].views;
+      std::vector<float> rot(static_cast<size_t>(K)), str(static_cast<size_t>(K));
+      for (int q = 0; q < K; ++q, at += nv) rot[size_t(q)] = float(combine(&weight_scores[at], nv));
+      for (int q = 0; q < K; ++q, at += nv) str[size_t(q)] = float(combine(&weight_scores[at], nv));
+      results[wave_start + k].weight_rotation = variance(rot);
+      results[wave_start + k].weight_stretch = variance(str);
     }
   }
   local.wall_seconds = seconds_since(t_start);

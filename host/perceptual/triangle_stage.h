@@ -10,7 +10,10 @@
 // and finite, and the acquisition is the expected improvement of the true objective
 // under that posterior (Gauss-Hermite quadrature over z), in which outcomes with
 // GMSD >= eps improve nothing. Until a feasible point is known it maximizes the
-// probability of feasibility; the first initial point is the identity (always feasible).
+// probability of feasibility; the first initial point is the identity, whose loss is
+// measured like any other: on faithful views it is 0 up to fp32, but a triangle whose
+// identity still scores >= eps (or that never finds a point below eps) is returned at the
+// identity with `feasible` false and its measured loss.
 #pragma once
 
 #include "engine.h"
@@ -24,11 +27,15 @@
 namespace uvpress::perceptual {
 
 struct TriangleStageOptions {
-  uint32_t view_size = 64;
+  uint32_t view_size = 64;     // S, pixels a view side (the paper's 64)
+  uint32_t max_patches = 4;    // views of a triangle too large to resolve in one (triangle_view.h)
   double epsilon = 0.01;       // GMSD bound (eq. 12)
-  int evaluations = 100;       // per triangle, initial design included
+  int evaluations = 100;       // per triangle, initial design included (the paper's budget)
   int initial = 10;
-  bool early_stop = true;      // leave the batch when the best objective stalls
+  // Leave the batch when the best objective stalls (>= 30 evaluations, 25 without a 0.1 %
+  // improvement). Off by default: 100 fixed evaluations is the reference behaviour until
+  // an adaptive budget is shown to lose nothing.
+  bool early_stop = false;
   double lambda_min = 0.05;
   uint32_t wave = 2048;        // triangles optimized together (bounds memory)
   int weight_samples = 8;      // per weight of eq. 17
@@ -46,8 +53,14 @@ struct TriangleResult {
   std::array<double, 4> jacobian{1, 0, 0, 1};  // row-major, texel space
   std::array<double, 4> rotation{1, 0, 0, 1};  // R-bar
   std::array<double, 4> stretch{1, 0, 0, 1};   // S-bar
-  double gmsd = 0;         // of the best point
-  double objective = 0;    // lambda1 lambda2 |T| + L_eps(gmsd)
+  bool feasible = false;   // some evaluation met GMSD < eps; else J is the identity, unreshaped
+  double gmsd = 0;         // measured at the returned J (RMS over the triangle's views)
+  double objective = 0;    // lambda1 lambda2 |T| + L_eps(gmsd); infinite when not feasible
+  double identity_gmsd = 0;     // measured at J = I (0 up to fp32 when the views are faithful)
+  double identity_lattice = 1;  // candidate tile spacing at J = I: 1 unless the tile had to be coarsened
+  double texels_per_pixel = 0;  // the largest over its views: <= 1 when they resolve the source texels
+  int views = 1;                // views scored per evaluation (patches of a large triangle)
+  bool complete = true;         // the views cover the whole triangle (false: a sample of patches)
   double texel_area = 0;   // |T|
   int evaluations = 0;
   double weight_rotation = 0, weight_stretch = 0;  // w_R, w_S (eq. 17)
@@ -57,7 +70,9 @@ struct TriangleStageStats {
   double host_seconds = 0;    // proposing and updating
   double device_seconds = 0;  // inside the engine's scoring calls
   double wall_seconds = 0;
-  size_t evaluations = 0;
+  size_t evaluations = 0;   // per-triangle evaluations (a triangle's views count once)
+  size_t view_scores = 0;   // views scored by the engine
+  size_t views = 0;         // views prepared
   size_t rounds = 0;
 };
 

@@ -76,8 +76,10 @@ std::vector<std::array<double, 2>> clip(std::vector<std::array<double, 2>> poly,
 
 }  // namespace
 
-engine::ViewSetDesc make_triangle_views(const TriangleViewInput& in, uint32_t size, const std::vector<uint32_t>& which) {
-  engine::ViewSetDesc desc;
+TriangleViews make_triangle_views(const TriangleViewInput& in, uint32_t size, const std::vector<uint32_t>& which,
+                                  uint32_t max_patches) {
+  TriangleViews out;
+  engine::ViewSetDesc& desc = out.desc;
   desc.size = size;
   const std::vector<uint32_t> welded = weld_positions(in.positions, in.vertex_count);
   // Triangles around each welded vertex.
@@ -91,6 +93,12 @@ engine::ViewSetDesc make_triangle_views(const TriangleViewInput& in, uint32_t si
     return Vec3(in.positions[3 * v], in.positions[3 * v + 1], in.positions[3 * v + 2]);
   };
   const double W = in.texture_width, H = in.texture_height;
+  auto texel_s = [&](uint32_t v) { return in.uvs[2 * v] * W - 0.5; };
+  auto texel_t = [&](uint32_t v) { return in.uvs[2 * v + 1] * H - 0.5; };
+  // Two corners are the same chart vertex when they weld in space and have equal UVs.
+  auto same_chart_vertex = [&](uint32_t a, uint32_t b) {
+    return welded[a] == welded[b] && in.uvs[2 * a] == in.uvs[2 * b] && in.uvs[2 * a + 1] == in.uvs[2 * b + 1];
+  };
   const double bound = double(shader::kViewGuardBand) - 8.0;
 
   std::vector<uint32_t> all;
@@ -100,17 +108,19 @@ engine::ViewSetDesc make_triangle_views(const TriangleViewInput& in, uint32_t si
     for (uint32_t t = 0; t < in.triangle_count; ++t) all[t] = t;
     list = &all;
   }
+  out.first_view.reserve(list->size() + 1);
   for (uint32_t tri : *list) {
+    out.first_view.push_back(uint32_t(desc.views.size()));
     const uint32_t* f = &in.indices[3 * tri];
     Vec3 a = vertex(f[0]), b = vertex(f[1]), c = vertex(f[2]);
     // Appendix A, Algorithm 1.
     Vec3 C = (a + b + c) / 3.0, N = (b - a).cross(c - a);
-    engine::ViewDesc view{uint32_t(desc.triangles.size()), 0, 0, 0};
-    double s_c = 0, t_c = 0;
-    for (int k = 0; k < 3; ++k) s_c += in.uvs[2 * f[k]] * W - 0.5, t_c += in.uvs[2 * f[k] + 1] * H - 0.5;
-    view.center_s = float(std::round(s_c / 3)), view.center_t = float(std::round(t_c / 3));
     if (N.norm() < 1e-30 || (a - C).norm() < 1e-30) {  // degenerate: an empty view
+      engine::ViewDesc view{uint32_t(desc.triangles.size()), 1, 1, 0};
+      desc.triangles.push_back(shader::ViewTriangle{});
       desc.views.push_back(view);
+      out.texels_per_pixel.push_back(0.0f);
+      out.complete.push_back(1);
       continue;
     }
     N.normalize();
@@ -123,52 +133,175 @@ engine::ViewSetDesc make_triangle_views(const TriangleViewInput& in, uint32_t si
     double w = hi_x - lo_x, h = hi_y - lo_y;
     if (w > h) lo_y -= (w - h) / 2, hi_y += (w - h) / 2;
     else lo_x -= (h - w) / 2, hi_x += (h - w) / 2;
-    const double scale = size / std::max(w, h);  // pixels per unit length
+    const double side = std::max(w, h);
+
+    // Texels per unit length along the worst direction: the largest singular value of
+    // d(s, t)/d(x, y) over the triangle's plane.
+    double sigma = 0;
+    {
+      double x[3], y[3], s[3], t[3];
+      for (int k = 0; k < 3; ++k) {
+        Vec3 d = vertex(f[k]) - C;
+        x[k] = d.dot(R), y[k] = d.dot(U), s[k] = texel_s(f[k]), t[k] = texel_t(f[k]);
+      }
+      const double det = (x[1] - x[0]) * (y[2] - y[0]) - (x[2] - x[0]) * (y[1] - y[0]);
+      if (std::abs(det) > 0) {
+        const double sx = ((s[1] - s[0]) * (y[2] - y[0]) - (s[2] - s[0]) * (y[1] - y[0])) / det;
+        const double sy = ((x[1] - x[0]) * (s[2] - s[0]) - (x[2] - x[0]) * (s[1] - s[0])) / det;
+        const double tx = ((t[1] - t[0]) * (y[2] - y[0]) - (t[2] - t[0]) * (y[1] - y[0])) / det;
+        const double ty = ((x[1] - x[0]) * (t[2] - t[0]) - (x[2] - x[0]) * (t[1] - t[0])) / det;
+        const double q = sx * sx + sy * sy + tx * tx + ty * ty, d2 = sx * ty - sy * tx;
+        sigma = std::sqrt(std::max(0.0, 0.5 * (q + std::sqrt(std::max(0.0, q * q - 4 * d2 * d2)))));
+      }
+    }
+    // Patches: n x n sub-squares so that each resolves its texels; keep those whose centre
+    // lies in the triangle (the centroid's square when none does), then at most
+    // `max_patches` of them, evenly spread.
+    const uint32_t n = std::max<uint32_t>(1, uint32_t(std::ceil(side * sigma / double(size) - 1e-9)));
+    std::vector<std::array<uint32_t, 2>> patches;
+    if (n == 1) {
+      patches.push_back({0, 0});
+    } else {
+      double px[3], py[3];
+      for (int k = 0; k < 3; ++k) {
+        Vec3 d = vertex(f[k]) - C;
+        px[k] = d.dot(R), py[k] = d.dot(U);
+      }
+      auto inside = [&](double x, double y) {
+        double e[3];
+        for (int k = 0; k < 3; ++k) {
+          int l = (k + 1) % 3;
+          e[k] = (px[l] - px[k]) * (y - py[k]) - (py[l] - py[k]) * (x - px[k]);
+        }
+        return (e[0] >= 0 && e[1] >= 0 && e[2] >= 0) || (e[0] <= 0 && e[1] <= 0 && e[2] <= 0);
+      };
+      for (uint32_t j = 0; j < n; ++j)
+        for (uint32_t i = 0; i < n; ++i)
+          if (inside(lo_x + (i + 0.5) * side / n, hi_y - (j + 0.5) * side / n)) patches.push_back({i, j});
+      if (patches.empty())
+        patches.push_back({std::min(n - 1, uint32_t((0 - lo_x) / side * n)), std::min(n - 1, uint32_t((hi_y - 0) / side * n))});
+      const uint32_t m = uint32_t(patches.size());
+      const uint32_t keep = std::min(m, std::max(1u, max_patches));
+      std::vector<std::array<uint32_t, 2>> kept;
+      for (uint32_t k = 0; k < keep; ++k) kept.push_back(patches[size_t((2 * uint64_t(k) + 1) * m / (2 * keep))]);
+      out.complete.push_back(keep == m);
+      patches = std::move(kept);
+    }
+    if (n == 1) out.complete.push_back(1);
 
     // The ring: this triangle first, then its neighbours by distance of their centroid.
     std::vector<uint32_t> ring = {tri};
     for (int k = 0; k < 3; ++k)
-      for (uint32_t n : around[welded[f[k]]])
-        if (std::find(ring.begin(), ring.end(), n) == ring.end()) ring.push_back(n);
+      for (uint32_t r : around[welded[f[k]]])
+        if (std::find(ring.begin(), ring.end(), r) == ring.end()) ring.push_back(r);
     auto centroid_distance = [&](uint32_t t) {
       const uint32_t* g = &in.indices[3 * t];
       return ((vertex(g[0]) + vertex(g[1]) + vertex(g[2])) / 3.0 - C).squaredNorm();
     };
     std::stable_sort(ring.begin() + 1, ring.end(),
                      [&](uint32_t x, uint32_t y) { return centroid_distance(x) < centroid_distance(y); });
+    // Charts among the ring: union of ring triangles that share a chart vertex.
+    std::vector<uint32_t> parent(ring.size());
+    for (size_t k = 0; k < ring.size(); ++k) parent[k] = uint32_t(k);
+    auto find = [&](uint32_t k) {
+      while (parent[k] != k) k = parent[k] = parent[parent[k]];
+      return k;
+    };
+    for (size_t p = 0; p < ring.size(); ++p)
+      for (size_t q = p + 1; q < ring.size(); ++q) {
+        const uint32_t* g = &in.indices[3 * ring[p]];
+        const uint32_t* h2 = &in.indices[3 * ring[q]];
+        bool shared = false;
+        for (int x = 0; x < 3 && !shared; ++x)
+          for (int y = 0; y < 3 && !shared; ++y) shared = same_chart_vertex(g[x], h2[y]);
+        if (shared) parent[find(uint32_t(q))] = find(uint32_t(p));
+      }
+    // Groups numbered by first appearance (the view's own chart is 0), each with its anchor.
+    std::vector<uint32_t> group_of(ring.size());
+    std::vector<uint32_t> root_of_group;
+    std::vector<std::array<double, 2>> anchor;
+    for (size_t k = 0; k < ring.size(); ++k) {
+      const uint32_t root = find(uint32_t(k));
+      auto it = std::find(root_of_group.begin(), root_of_group.end(), root);
+      if (it != root_of_group.end()) {
+        group_of[k] = std::min(uint32_t(it - root_of_group.begin()), shader::kViewMaxGroups - 1);
+        continue;
+      }
+      group_of[k] = std::min(uint32_t(root_of_group.size()), shader::kViewMaxGroups - 1);
+      root_of_group.push_back(root);
+      const uint32_t* g = &in.indices[3 * ring[k]];
+      if (k == 0) {
+        anchor.push_back({0, 0});  // per view below (the view's centre)
+        continue;
+      }
+      // The seam vertex: a corner welded to one of the view triangle's corners.
+      uint32_t v = g[0];
+      for (int x = 0; x < 3; ++x)
+        for (int y = 0; y < 3; ++y)
+          if (welded[g[x]] == welded[f[y]]) v = g[x];
+      anchor.push_back({std::round(texel_s(v)), std::round(texel_t(v))});
+    }
+    const uint32_t group_count = std::min(uint32_t(root_of_group.size()), shader::kViewMaxGroups);
 
-    for (uint32_t t : ring) {
-      const uint32_t* g = &in.indices[3 * t];
-      double x[3], y[3], z[3], s[3], tt[3];
-      for (int k = 0; k < 3; ++k) {
-        Vec3 d = vertex(g[k]) - C;
-        x[k] = (d.dot(R) - lo_x) * scale;
-        y[k] = (hi_y - d.dot(U)) * scale;  // pixel rows go down, U goes up
-        z[k] = d.dot(N);                    // towards the eye at C + 500 N: larger is nearer
-        s[k] = in.uvs[2 * g[k]] * W - 0.5;
-        tt[k] = in.uvs[2 * g[k] + 1] * H - 0.5;
+    const double sub = side / n;          // patch side, space units
+    const double scale = size / sub;      // pixels per unit length
+    for (const auto& patch : patches) {
+      const double plo_x = lo_x + patch[0] * sub, phi_y = hi_y - patch[1] * sub;
+      engine::ViewDesc view{uint32_t(desc.triangles.size()), 0, group_count, 0};
+      out.texels_per_pixel.push_back(float(sigma / scale));
+      // Group 0's anchor: the triangle's centroid (one view) or the patch's centre, in the
+      // view triangle's texel coordinates.
+      double anchor0[2];
+      {
+        const double cx = n == 1 ? 0.0 : plo_x + sub / 2, cy = n == 1 ? 0.0 : phi_y - sub / 2;
+        double x[3], y[3], s[3], t[3];
+        for (int k = 0; k < 3; ++k) {
+          Vec3 d = vertex(f[k]) - C;
+          x[k] = d.dot(R), y[k] = d.dot(U), s[k] = texel_s(f[k]), t[k] = texel_t(f[k]);
+        }
+        const double det = (x[1] - x[0]) * (y[2] - y[0]) - (x[2] - x[0]) * (y[1] - y[0]);
+        const double l1 = ((cx - x[0]) * (y[2] - y[0]) - (x[2] - x[0]) * (cy - y[0])) / det;
+        const double l2 = ((x[1] - x[0]) * (cy - y[0]) - (cx - x[0]) * (y[1] - y[0])) / det;
+        anchor0[0] = std::round(s[0] + l1 * (s[1] - s[0]) + l2 * (s[2] - s[0]));
+        anchor0[1] = std::round(t[0] + l1 * (t[1] - t[0]) + l2 * (t[2] - t[0]));
       }
-      shader::ViewTriangle vt{};
-      if (!plane(x, y, z, vt.depth) || !plane(x, y, s, vt.s) || !plane(x, y, tt, vt.t)) continue;  // edge-on
-      std::vector<std::array<double, 2>> poly = {{x[0], y[0]}, {x[1], y[1]}, {x[2], y[2]}};
-      bool inside = true;
-      for (auto& p : poly) inside &= std::abs(p[0]) <= bound && std::abs(p[1]) <= bound;
-      if (!inside) poly = clip(poly, bound);
-      for (size_t k = 1; k + 1 < poly.size(); ++k) {
-        if (view.triangle_count == shader::kViewMaxTriangles) break;
-        const std::array<double, 2>* p3[3] = {&poly[0], &poly[k], &poly[k + 1]};
-        for (int q = 0; q < 3; ++q) vt.xy[2 * q] = float((*p3[q])[0]), vt.xy[2 * q + 1] = float((*p3[q])[1]);
-        desc.triangles.push_back(vt);
-        ++view.triangle_count;
+      for (size_t r = 0; r < ring.size(); ++r) {
+        const uint32_t* g = &in.indices[3 * ring[r]];
+        double x[3], y[3], z[3], s[3], tt[3];
+        for (int k = 0; k < 3; ++k) {
+          Vec3 d = vertex(g[k]) - C;
+          x[k] = (d.dot(R) - plo_x) * scale;
+          y[k] = (phi_y - d.dot(U)) * scale;  // pixel rows go down, U goes up
+          z[k] = d.dot(N);                     // towards the eye at C + 500 N: larger is nearer
+          s[k] = texel_s(g[k]);
+          tt[k] = texel_t(g[k]);
+        }
+        shader::ViewTriangle vt{};
+        if (!plane(x, y, z, vt.depth) || !plane(x, y, s, vt.s) || !plane(x, y, tt, vt.t)) continue;  // edge-on
+        vt.group = group_of[r];
+        const double* an = group_of[r] == 0 ? anchor0 : anchor[group_of[r]].data();
+        vt.anchor_s = float(an[0]), vt.anchor_t = float(an[1]);
+        std::vector<std::array<double, 2>> poly = {{x[0], y[0]}, {x[1], y[1]}, {x[2], y[2]}};
+        bool in_band = true;
+        for (auto& p : poly) in_band &= std::abs(p[0]) <= bound && std::abs(p[1]) <= bound;
+        if (!in_band) poly = clip(poly, bound);
+        for (size_t k = 1; k + 1 < poly.size(); ++k) {
+          if (view.triangle_count == shader::kViewMaxTriangles) break;
+          const std::array<double, 2>* p3[3] = {&poly[0], &poly[k], &poly[k + 1]};
+          for (int q = 0; q < 3; ++q) vt.xy[2 * q] = float((*p3[q])[0]), vt.xy[2 * q + 1] = float((*p3[q])[1]);
+          desc.triangles.push_back(vt);
+          ++view.triangle_count;
+        }
       }
+      if (view.triangle_count == 0) {  // keep the range valid: an empty placeholder triangle
+        desc.triangles.push_back(shader::ViewTriangle{});
+        view.triangle_count = 1;
+      }
+      desc.views.push_back(view);
     }
-    if (view.triangle_count == 0) {  // keep the range valid: an empty placeholder triangle
-      desc.triangles.push_back(shader::ViewTriangle{});
-      view.triangle_count = 1;
-    }
-    desc.views.push_back(view);
   }
-  return desc;
+  out.first_view.push_back(uint32_t(desc.views.size()));
+  return out;
 }
 
 }  // namespace uvpress::perceptual

@@ -43,17 +43,20 @@ ViewSetDesc random_views(uint32_t count, uint32_t size, uint32_t seed, const std
   d.size = size;
   d.texture = tex.data(), d.texture_width = tw, d.texture_height = th;
   for (uint32_t v = 0; v < count; ++v) {
-    ViewDesc view{uint32_t(d.triangles.size()), uint32_t(1 + rng() % 12), 0, 0};
+    // Some views with several groups (charts across a seam), each with its own anchor.
+    ViewDesc view{uint32_t(d.triangles.size()), uint32_t(1 + rng() % 12), uint32_t(1 + rng() % 3), 0};
+    float anchor[3][2];
+    for (auto& a : anchor) a[0] = std::round(tc(rng) * 0.3f), a[1] = std::round(tc(rng) * 0.3f);
     for (uint32_t k = 0; k < view.triangle_count; ++k) {
       ViewTriangle t{};
+      t.group = k == 0 ? 0 : rng() % view.group_count;
+      t.anchor_s = anchor[t.group][0], t.anchor_t = anchor[t.group][1];
       for (float& c : t.xy) c = std::round(pos(rng) * 64) / 64;  // some vertices on exact pixel centres/edges
       t.depth[0] = unit(rng), t.depth[1] = 0.01f * unit(rng), t.depth[2] = 0.01f * unit(rng);
       t.s[0] = tc(rng) * 0.3f, t.s[1] = 0.2f * unit(rng), t.s[2] = 0.2f * unit(rng);
       t.t[0] = tc(rng) * 0.3f, t.t[1] = 0.2f * unit(rng), t.t[2] = 0.2f * unit(rng);
       d.triangles.push_back(t);
     }
-    view.center_s = std::round(d.triangles[view.first_triangle].s[0]);
-    view.center_t = std::round(d.triangles[view.first_triangle].t[0]);
     d.views.push_back(view);
   }
   return d;
@@ -85,7 +88,7 @@ ViewSetDesc mesh_views(const GridMesh& m, const std::vector<float>& tex, uint32_
   in.positions = m.positions.data(), in.vertex_count = m.positions.size() / 3;
   in.indices = m.indices.data(), in.triangle_count = m.indices.size() / 3;
   in.uvs = m.uvs.data(), in.texture_width = tw, in.texture_height = th;
-  ViewSetDesc d = perceptual::make_triangle_views(in, size);
+  ViewSetDesc d = perceptual::make_triangle_views(in, size).desc;
   d.texture = tex.data(), d.texture_width = tw, d.texture_height = th;
   return d;
 }
@@ -113,11 +116,12 @@ TEST_CASE("Views: coverage identical and pixels within 1e-5 between backends on 
     auto a = cpu_engine->prepare_views(d), b = vk->prepare_views(d);
     std::vector<ViewCandidate> cands;
     for (uint32_t v = 0; v < 40; ++v) cands.push_back(candidate(v, 0.3f + 0.017f * v, 0.9f - 0.01f * v, 0.1f * v));
-    std::vector<float> ga(cands.size()), gb(cands.size());
+    std::vector<float> ga(cands.size()), gb(cands.size()), la(cands.size()), lb(cands.size());
     ViewImages ia, ib;
-    cpu_engine->score_views(*a, cands.data(), cands.size(), ga.data(), &ia);
-    vk->score_views(*b, cands.data(), cands.size(), gb.data(), &ib);
+    cpu_engine->score_views(*a, cands.data(), cands.size(), ga.data(), &ia, la.data());
+    vk->score_views(*b, cands.data(), cands.size(), gb.data(), &ib, lb.data());
     CHECK(ia.coverage == ib.coverage);
+    CHECK(la == lb);  // the same tile layout, coarsened (or not) alike
     size_t covered = 0;
     for (uint8_t c : ia.coverage) covered += c != shader::kNoTriangle;
     CHECK(covered > ia.coverage.size() / 4);  // the test exercises real coverage
@@ -127,10 +131,18 @@ TEST_CASE("Views: coverage identical and pixels within 1e-5 between backends on 
       cand_err = std::max(cand_err, double(std::abs(ia.candidate[i] - ib.candidate[i])));
     }
     CHECK(ref_err < 1e-5);
-    // The bakes differ only in the order CG sums its dot products; random planes make
-    // badly conditioned tiles, so weakly seen texels differ most.
+    // The bakes differ only in the order CG sums its dot products (and fp32 division);
+    // random overlapping planes make badly conditioned tiles, so weakly seen texels differ
+    // most. (With a membrane of 1e-5 such tiles reached condition numbers of 1e8, past
+    // what fp32 CG resolves, and the backends parted: kSmoothness is 1e-4 for that.)
     CHECK(cand_err < 2e-3);
-    for (size_t k = 0; k < cands.size(); ++k) CHECK(std::abs(ga[k] - gb[k]) <= 1e-3 * ga[k] + 1e-4);
+    for (size_t k = 0; k < cands.size(); ++k) {
+      cpu::TileMap m = cpu::map_to_tile(d.views[cands[k].view], d.triangles.data(), size, ia.coverage.data() + k * size * size, cands[k].j);
+      uint32_t it = 0;
+      cpu::bake_tile(m, ia.reference.data() + k * size * size, &it);
+      INFO("cand " << k << " tile " << m.width << "x" << m.height << " lattice " << m.lattice << " iterations " << it);
+      CHECK(std::abs(ga[k] - gb[k]) <= 1e-3 * ga[k] + 1e-4);
+    }
   }
   CHECK(vk->validation_errors() == 0);
 }
@@ -162,18 +174,30 @@ TEST_CASE("Views: the bake equals a dense double normal-equations solve", "[engi
         A(k, (j0 + 1) * w + i0) += (1 - fa) * fb, A(k, (j0 + 1) * w + i0 + 1) += fa * fb;
         ref(k) = ia.reference[m.pixel[size_t(k)]];
       }
-      const double mu = cpu::kSmoothness * q / n;
-      Eigen::MatrixXd L = Eigen::MatrixXd::Zero(n, n);  // 4-neighbour membrane
+      // Texels that some pixel sees (a fixed-point weight^2 that rounds above 0) are the
+      // unknowns; the others stay at the mean reference (they cannot change the render).
+      std::vector<int> seen(size_t(n), 0);
+      for (int k = 0; k < q; ++k)
+        for (int t = 0; t < n; ++t) seen[size_t(t)] += int(A(k, t) * A(k, t) * cpu::kFixedPoint + 0.5) > 0;
+      double mean = ref.mean();
+      int seen_count = 0;
+      for (int t = 0; t < n; ++t) seen_count += seen[size_t(t)] > 0;
+      const double mu = cpu::kSmoothness * q / seen_count;
+      Eigen::MatrixXd L = Eigen::MatrixXd::Zero(n, n);  // 4-neighbour membrane between seen texels
       for (int t = 0; t < n; ++t) {
         int i = t % int(m.width), j = t / int(m.width);
         for (auto [di, dj] : {std::pair{1, 0}, {0, 1}}) {
           if (i + di >= int(m.width) || j + dj >= int(m.height)) continue;
           int u = (j + dj) * int(m.width) + i + di;
+          if (!seen[size_t(t)] || !seen[size_t(u)]) continue;
           L(t, t) += 1, L(u, u) += 1, L(t, u) -= 1, L(u, t) -= 1;
         }
       }
       Eigen::MatrixXd N = A.transpose() * A + mu * L;
-      Eigen::VectorXd x = N.ldlt().solve(A.transpose() * ref);
+      Eigen::VectorXd rhs = A.transpose() * (ref - A * Eigen::VectorXd::Constant(n, mean));
+      for (int t = 0; t < n; ++t)
+        if (!seen[size_t(t)]) N.row(t).setZero(), N.col(t).setZero(), N(t, t) = 1, rhs(t) = 0;
+      Eigen::VectorXd x = N.ldlt().solve(rhs) + Eigen::VectorXd::Constant(n, mean);
       Eigen::VectorXd render = A * x;
       double err_cpu = 0, err_vk = 0;
       for (int k = 0; k < q; ++k) {
@@ -223,11 +247,16 @@ TEST_CASE("Views: identity reproduces the reference; shrinking costs more on det
       CHECK(std::abs(gd[k + 3] - gd[k + 2]) <= 0.02 * gd[k + 2] + 1e-4);
       CHECK(std::abs(gd[k + 4] - gd[k + 2]) <= 0.02 * gd[k + 2] + 1e-4);
     }
-    // Identity render matches the reference pixel by pixel.
-    double err = 0;
+    // Identity render matches the reference pixel by pixel, up to the membrane's pull on
+    // the weakly seen texels at the coverage border (mu = 1e-4 per pixel of data).
+    double err = 0, sum = 0;
     const size_t n = size_t(size) * size;
-    for (size_t i = 0; i < n; ++i) err = std::max(err, double(std::abs(img.candidate[i] - img.reference[i])));
-    CHECK(err < 2e-3);
+    for (size_t i = 0; i < n; ++i) {
+      const double e = std::abs(img.candidate[i] - img.reference[i]);
+      err = std::max(err, e), sum += e;
+    }
+    CHECK(err < 1e-2);
+    CHECK(sum / double(n) < 5e-4);
     CHECK(engine->validation_errors() == 0);
   }
 }
@@ -238,7 +267,7 @@ TEST_CASE("Views: per-triangle camera frames the triangle in its bounding square
   const float uv[] = {0.1f, 0.1f, 0.5f, 0.1f, 0.1f, 0.3f};
   const uint32_t idx[] = {0, 1, 2};
   perceptual::TriangleViewInput in{pos, 3, idx, 1, uv, 100, 100};
-  auto d = perceptual::make_triangle_views(in, 64);
+  auto d = perceptual::make_triangle_views(in, 64).desc;
   REQUIRE(d.views.size() == 1);
   REQUIRE(d.views[0].triangle_count == 1);
   const auto& t = d.triangles[0];
@@ -260,5 +289,162 @@ TEST_CASE("Views: per-triangle camera frames the triangle in its bounding square
       match |= std::abs(s - (uv[2 * v] * 100 - 0.5f)) < 1e-3f && std::abs(tt - (uv[2 * v + 1] * 100 - 0.5f)) < 1e-3f;
     CHECK(match);
   }
-  CHECK(d.views[0].center_s == std::round((10 + 50 + 10) / 3.0f - 0.5f));
+  CHECK(t.anchor_s == std::round((10 + 50 + 10) / 3.0f - 0.5f));  // J acts about the centroid's texel
+  CHECK(t.group == 0);
+  CHECK(d.views[0].group_count == 1);
+}
+
+namespace {
+
+// A flat square of two triangles, `span` texels a side, over a texture of stripes `period`
+// texels apart on a mid-grey ramp; optionally cut along its diagonal with the second
+// triangle's UVs moved elsewhere in the texture (a UV seam, same texture content there).
+struct Square {
+  std::vector<float> positions, uvs;
+  std::vector<uint32_t> indices;
+  std::vector<float> texture;
+  uint32_t tw = 256, th = 256;
+};
+Square square(float span, float period, bool seam) {
+  Square q;
+  auto stripes = [&](double x, double y) {
+    return float(0.45 + 0.3 * std::sin(2 * M_PI * (x + 0.6 * y) / period) + 0.001 * x);
+  };
+  q.texture.resize(size_t(q.tw) * q.th);
+  // The texture holds the surface signal at the chart's place and, for the seam, a copy
+  // of the second triangle's part at an offset of 128 texels to the right.
+  for (uint32_t y = 0; y < q.th; ++y)
+    for (uint32_t x = 0; x < q.tw; ++x)
+      q.texture[size_t(y) * q.tw + x] = x < 128 ? stripes(x, y) : stripes(double(x) - 128.0, y);
+  const float o = 20.0f;  // chart origin, texels
+  const float corner[4][2] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+  for (auto& c : corner) {
+    q.positions.insert(q.positions.end(), {c[0], c[1], 0.0f});
+    q.uvs.insert(q.uvs.end(), {(o + span * c[0] + 0.5f) / q.tw, (o + span * c[1] + 0.5f) / q.th});
+  }
+  q.indices = {0, 1, 2};
+  if (!seam) {
+    q.indices.insert(q.indices.end(), {0, 2, 3});
+  } else {  // the second triangle on its own vertices, 128 texels to the right
+    for (int k : {0, 2, 3}) {
+      q.positions.insert(q.positions.end(), {corner[k][0], corner[k][1], 0.0f});
+      q.uvs.insert(q.uvs.end(), {(o + 128 + span * corner[k][0] + 0.5f) / q.tw, (o + span * corner[k][1] + 0.5f) / q.th});
+    }
+    q.indices.insert(q.indices.end(), {4, 5, 6});
+  }
+  return q;
+}
+
+ViewSetDesc square_views(const Square& q, uint32_t size) {
+  perceptual::TriangleViewInput in{q.positions.data(), q.positions.size() / 3, q.indices.data(), q.indices.size() / 3,
+                                   q.uvs.data(), q.tw, q.th};
+  ViewSetDesc d = perceptual::make_triangle_views(in, size).desc;
+  d.texture = q.texture.data(), d.texture_width = q.tw, d.texture_height = q.th;
+  return d;
+}
+
+}  // namespace
+
+TEST_CASE("Views: a 48-texel view with 5-texel detail is lossless at J = I and shrinking costs", "[engine][views][vulkan]") {
+  // The square's bounding square spans 48 texels: before views resolved their texels the
+  // candidate tile was capped at 32 texels and the identity itself cost ~0.05 here.
+  const Square q = square(48, 5, false);
+  const ViewSetDesc d = square_views(q, 64);
+  REQUIRE(d.views.size() == 2);
+  std::vector<float> g[2], lat[2];
+  int b = 0;
+  for (auto* e : {make_cpu_engine({}).release(), lavapipe().release()}) {
+    std::unique_ptr<Engine> engine(e);
+    INFO(engine->device().backend);
+    auto views = engine->prepare_views(d);
+    std::vector<ViewCandidate> c;
+    for (uint32_t v = 0; v < 2; ++v)
+      for (float l : {1.0f, 0.9f, 0.7f, 0.5f}) c.push_back(candidate(v, l, l, 0.0f));
+    g[b].resize(c.size()), lat[b].resize(c.size());
+    engine->score_views(*views, c.data(), c.size(), g[b].data(), nullptr, lat[b].data());
+    for (uint32_t v = 0; v < 2; ++v) {
+      const float* s = &g[b][4 * v];
+      INFO("view " << v << ": " << s[0] << " " << s[1] << " " << s[2] << " " << s[3]);
+      for (int k = 0; k < 4; ++k) CHECK(lat[b][4 * v + size_t(k)] == 1.0f);  // J's own lattice
+      CHECK(s[0] < 1e-3);                      // the identity reproduces the reference
+      CHECK(s[2] > 2 * s[1]);                  // lambda 0.7 clearly costs more than 0.9:
+      CHECK(s[2] > s[1] + 1e-3);               // twice as much, and by more than 1e-3
+      CHECK(s[1] > s[0]);
+      CHECK(s[3] > s[2]);
+    }
+    CHECK(engine->validation_errors() == 0);
+    ++b;
+  }
+  for (size_t k = 0; k < g[0].size(); ++k) CHECK(std::abs(g[0][k] - g[1][k]) <= 1e-3 * g[0][k] + 1e-4);
+}
+
+TEST_CASE("Views: a one-ring across a UV seam gets its own region of the candidate", "[engine][views][vulkan]") {
+  const Square q = square(40, 6, true);
+  const ViewSetDesc d = square_views(q, 64);
+  REQUIRE(d.views.size() == 2);
+  for (const ViewDesc& v : d.views) {
+    REQUIRE(v.triangle_count == 2);
+    CHECK(v.group_count == 2);
+    const ViewTriangle& own = d.triangles[v.first_triangle];
+    const ViewTriangle& other = d.triangles[v.first_triangle + 1];
+    CHECK(own.group == 0);
+    CHECK(other.group == 1);
+    // The neighbour's anchor is the seam vertex in its own chart: 128 texels away in s.
+    CHECK(std::abs(std::abs(other.anchor_s - own.anchor_s) - 128) < 30);
+  }
+  std::vector<float> g[2];
+  int b = 0;
+  for (auto* e : {make_cpu_engine({}).release(), lavapipe().release()}) {
+    std::unique_ptr<Engine> engine(e);
+    INFO(engine->device().backend);
+    auto views = engine->prepare_views(d);
+    std::vector<ViewCandidate> c;
+    for (uint32_t v = 0; v < 2; ++v)
+      for (float l : {1.0f, 0.6f, 0.4f}) c.push_back(candidate(v, l, l, l < 1 ? 0.2f : 0.0f));
+    g[b].resize(c.size());
+    std::vector<float> lat(c.size());
+    engine->score_views(*views, c.data(), c.size(), g[b].data(), nullptr, lat.data());
+    for (uint32_t v = 0; v < 2; ++v) {
+      const float* s = &g[b][3 * v];
+      INFO("view " << v << ": " << s[0] << " " << s[1] << " " << s[2]);
+      // One tile for both charts would span 128 texels and be coarsened 2-4x: the identity
+      // would no longer be lossless. Two regions keep J's lattice.
+      CHECK(lat[3 * v] == 1.0f);
+      CHECK(s[0] < 1e-3);
+      CHECK(s[1] > s[0] + 1e-3);
+      CHECK(s[2] > s[1]);
+    }
+    CHECK(engine->validation_errors() == 0);
+    ++b;
+  }
+  for (size_t k = 0; k < g[0].size(); ++k) CHECK(std::abs(g[0][k] - g[1][k]) <= 1e-3 * g[0][k] + 1e-4);
+}
+
+TEST_CASE("Views: a triangle too large for one view is seen through patches that resolve its texels", "[engine][views]") {
+  const Square q = square(150, 5, false);  // 150 texels across: 3 x 3 patches of 50 texels
+  perceptual::TriangleViewInput in{q.positions.data(), q.positions.size() / 3, q.indices.data(), q.indices.size() / 3,
+                                   q.uvs.data(), q.tw, q.th};
+  auto tv = perceptual::make_triangle_views(in, 64, {}, 4);
+  REQUIRE(tv.first_view.size() == 3);
+  for (int t = 0; t < 2; ++t) {
+    const uint32_t views = tv.first_view[size_t(t) + 1] - tv.first_view[size_t(t)];
+    CHECK(views == 4);  // 6 patch centres lie inside the right triangle; 4 are kept
+    CHECK(!tv.complete[size_t(t)]);
+  }
+  for (float tpp : tv.texels_per_pixel) {
+    CHECK(tpp <= 1.0f);
+    CHECK(tpp > 0.5f);
+  }
+  ViewSetDesc d = tv.desc;
+  d.texture = q.texture.data(), d.texture_width = q.tw, d.texture_height = q.th;
+  auto engine = make_cpu_engine({});
+  auto views = engine->prepare_views(d);
+  std::vector<ViewCandidate> c;
+  for (uint32_t v = 0; v < d.views.size(); ++v) c.push_back(candidate(v, 1, 1, 0)), c.push_back(candidate(v, 0.6f, 0.6f, 0));
+  std::vector<float> g(c.size());
+  engine->score_views(*views, c.data(), c.size(), g.data());
+  for (size_t k = 0; k < c.size(); k += 2) {
+    CHECK(g[k] < 1e-3);
+    CHECK(g[k + 1] > g[k] + 1e-3);
+  }
 }

@@ -25,7 +25,7 @@ void bench_views(const Globals& g, const std::vector<uint32_t>& batches, uint32_
   std::vector<float> lum = perceptual::luminance_plane(tex);
   perceptual::TriangleViewInput in{p.positions.data(), p.vertex_count(), p.indices.data(), p.triangle_count(),
                                    p.uv_sets[0].uv.data(), tex.width, tex.height};
-  engine::ViewSetDesc desc = perceptual::make_triangle_views(in, size);
+  engine::ViewSetDesc desc = perceptual::make_triangle_views(in, size).desc;
   desc.texture = lum.data(), desc.texture_width = tex.width, desc.texture_height = tex.height;
 
   // Candidates as the triangle stage draws them: lambda in (0, 1], alpha, beta in [0, pi/2).
