@@ -162,6 +162,7 @@ constexpr uint kViewGuardBand = 511;      // |screen coordinate| bound: 4 sub-pi
 // coarser power-of-two lattice, which the engine reports (score_views' `lattice`).
 constexpr uint kTileMax = 96;
 constexpr uint kViewMaxGroups = 8;        // charts in one view's ring
+constexpr uint kViewMaxTexelsPerPixel = 64;  // |d(s, t)/d(x, y)| bound of a view triangle's planes
 // view_score.comp's scratch slot per candidate, 32-bit words: 4 per pixel (u, v, candidate,
 // group), 15 per tile texel (stencil 9, rhs, x, r, Ap, diagonal, p) plus p's zero padding.
 constexpr uint kViewScoreSlotWords = 4 * kViewMaxSize * kViewMaxSize + 14 * kTileMax * kTileMax + (kTileMax + 2) * (kTileMax + 2);
@@ -184,6 +185,7 @@ static_assert(sizeof(RebakePush) == 64, "push constant layout");
 #define kViewGuardBand 511u
 #define kTileMax 96u
 #define kViewMaxGroups 8u
+#define kViewMaxTexelsPerPixel 64u
 #define kNoTriangle 255u
 #define kMeshTile 16u
 #define kRebakeTile 16u

@@ -164,18 +164,21 @@ void main() {
   int w = 1, h = 1;
   while (!empty) {
     uint x = 0u, y = 0u, shelf = 0u, width = 0u;
-    for (uint g = 0u; g < G; ++g) {
+    bool fits = true;
+    for (uint g = 0u; g < G && fits; ++g) {
       vec4 box = s_box[g];
       if (box.x > box.y) continue;
       float ou = floor(box.x * inv), ov = floor(box.z * inv);
-      uint gw = uint(floor(box.y * inv) - ou) + 2u;
-      uint gh = uint(floor(box.w * inv) - ov) + 2u;
+      float wf = floor(box.y * inv) - ou + 2.0, hf = floor(box.w * inv) - ov + 2.0;
+      fits = wf <= float(kTileMax) && hf <= float(kTileMax);
+      if (!fits) break;
+      uint gw = uint(wf), gh = uint(hf);
       if (x > 0u && x + gw > kTileMax) { x = 0u; y += shelf + 1u; shelf = 0u; }
       if (tid == 0u) s_place[g] = vec4(ou, ov, float(x), float(y));
       x += gw + 1u; shelf = max(shelf, gh); width = max(width, x - 1u);
     }
     w = int(width); h = int(y + shelf);
-    if (width <= kTileMax && y + shelf <= kTileMax) break;
+    if (fits && width <= kTileMax && y + shelf <= kTileMax) break;
     inv *= 0.5;
   }
   uint n = uint(w * h);
@@ -191,9 +194,9 @@ void main() {
     if (cover_at(pix) == kNoTriangle) continue;
     vec4 place = s_place[scratch[g_slot + OFF_GROUP + pix]];  // ou, ov, x, y
     precise float a = sf(OFF_U + pix) * inv - place.x;
-    a += place.z;
+    a = min(a + place.z, float(w) - 1.0001);
     precise float b = sf(OFF_V + pix) * inv - place.y;
-    b += place.w;
+    b = min(b + place.w, float(h) - 1.0001);
     set_sf(OFF_U + pix, a);
     set_sf(OFF_V + pix, b);
     float fa0 = floor(a), fb0 = floor(b);

@@ -60,17 +60,22 @@ TileMap map_to_tile(const ViewDesc& view, const ViewTriangle* tris, uint32_t siz
   float px[shader::kViewMaxGroups] = {}, py[shader::kViewMaxGroups] = {};
   for (;;) {
     uint32_t x = 0, y = 0, shelf = 0, width = 0;
-    for (uint32_t g = 0; g < groups; ++g) {
+    bool fits = true;
+    for (uint32_t g = 0; g < groups && fits; ++g) {
       if (lo_u[g] > hi_u[g]) continue;  // no pixel of this group in the view
       ou[g] = std::floor(lo_u[g] * inv), ov[g] = std::floor(lo_v[g] * inv);
-      const uint32_t w = uint32_t(std::floor(hi_u[g] * inv) - ou[g]) + 2;
-      const uint32_t h = uint32_t(std::floor(hi_v[g] * inv) - ov[g]) + 2;
+      // Sizes compared as floats before any cast (check_view_set bounds the planes, so
+      // the halving ends after a few steps).
+      const float wf = std::floor(hi_u[g] * inv) - ou[g] + 2, hf = std::floor(hi_v[g] * inv) - ov[g] + 2;
+      fits = wf <= float(shader::kTileMax) && hf <= float(shader::kTileMax);
+      if (!fits) break;
+      const uint32_t w = uint32_t(wf), h = uint32_t(hf);
       if (x > 0 && x + w > shader::kTileMax) x = 0, y += shelf + 1, shelf = 0;
       px[g] = float(x), py[g] = float(y);
       x += w + 1, shelf = std::max(shelf, h), width = std::max(width, x - 1);
     }
     m.width = width, m.height = y + shelf;
-    if (m.width <= shader::kTileMax && m.height <= shader::kTileMax) break;
+    if (fits && m.width <= shader::kTileMax && m.height <= shader::kTileMax) break;
     inv *= 0.5f;
   }
   m.lattice = 1.0f / inv;
@@ -78,7 +83,9 @@ TileMap map_to_tile(const ViewDesc& view, const ViewTriangle* tris, uint32_t siz
   for (size_t k = 0; k < u.size(); ++k) {
     const uint32_t g = group[k];
     float a = u[k] * inv - ou[g], b = v[k] * inv - ov[g];
-    m.a[k] = a + px[g], m.b[k] = b + py[g];
+    // Inside the region by construction; the clamp only catches the rounding of a value
+    // a hair below the region's last texel up onto it, at coarse lattices.
+    m.a[k] = std::min(a + px[g], float(m.width) - 1.0001f), m.b[k] = std::min(b + py[g], float(m.height) - 1.0001f);
   }
   return m;
 }

@@ -80,6 +80,13 @@ struct TriangleStageStats {
 std::array<double, 4> jacobian_of(const double x[4], double lambda_min, double* alpha = nullptr,
                                   double* lambda1 = nullptr, double* lambda2 = nullptr, double* beta = nullptr);
 
+// The loss of `triangles` (all when empty) at one fixed Jacobian (texel space, row-major),
+// measured on the views the triangle stage uses and combined the same way (RMS over a
+// triangle's views): e.g. J = I (should be ~0) or J = 0.5 I (what halving costs).
+std::vector<double> measure_triangles(engine::Engine& engine, const TriangleViewInput& input,
+                                      const std::vector<float>& texture, const TriangleStageOptions& options,
+                                      const std::array<double, 4>& jacobian, const std::vector<uint32_t>& triangles = {});
+
 // Optimizes `triangles` (all when empty) of the mesh in `input`, sampling `texture`
 // (luminance, input.texture_width x texture_height). Deterministic for a given seed,
 // whatever the thread count and the engine.

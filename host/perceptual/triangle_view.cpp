@@ -24,6 +24,9 @@ std::vector<float> luminance_plane(const Image& img) {
 
 namespace {
 
+constexpr double kMaxNeighbourTexelsPerPixel = 8;  // see the ring loop in make_triangle_views
+constexpr uint32_t kMaxPatchGrid = 16;
+
 // Vertex id by position: glTF splits vertices at UV seams and normal creases, but the
 // one-ring is about the surface, so neighbours are found through welded positions.
 std::vector<uint32_t> weld_positions(const float* p, size_t n) {
@@ -157,7 +160,9 @@ TriangleViews make_triangle_views(const TriangleViewInput& in, uint32_t size, co
     // Patches: n x n sub-squares so that each resolves its texels; keep those whose centre
     // lies in the triangle (the centroid's square when none does), then at most
     // `max_patches` of them, evenly spread.
-    const uint32_t n = std::max<uint32_t>(1, uint32_t(std::ceil(side * sigma / double(size) - 1e-9)));
+    // (At most kMaxPatchGrid a side: slivers with a large UV extent are not worth more.)
+    const double grid = std::ceil(side * sigma / double(size) - 1e-9);
+    const uint32_t n = uint32_t(std::clamp(grid, 1.0, double(kMaxPatchGrid)));
     std::vector<std::array<uint32_t, 2>> patches;
     if (n == 1) {
       patches.push_back({0, 0});
@@ -278,6 +283,11 @@ TriangleViews make_triangle_views(const TriangleViewInput& in, uint32_t size, co
         }
         shader::ViewTriangle vt{};
         if (!plane(x, y, z, vt.depth) || !plane(x, y, s, vt.s) || !plane(x, y, tt, vt.t)) continue;  // edge-on
+        // A neighbour nearly edge-on to this camera (a fold) maps a sliver of pixels to a
+        // long run of texels: it would only blow up the candidate tile. Left out of the view
+        // (background in both renders), like the view's own triangle past the engine's bound.
+        const double grad = std::max({std::abs(vt.s[1]), std::abs(vt.s[2]), std::abs(vt.t[1]), std::abs(vt.t[2])});
+        if (grad > (r == 0 ? double(shader::kViewMaxTexelsPerPixel) : kMaxNeighbourTexelsPerPixel)) continue;
         vt.group = group_of[r];
         const double* an = group_of[r] == 0 ? anchor0 : anchor[group_of[r]].data();
         vt.anchor_s = float(an[0]), vt.anchor_t = float(an[1]);

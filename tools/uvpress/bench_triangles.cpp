@@ -9,6 +9,8 @@
 #include "perceptual/triangle_stage.h"
 #include "pipeline/demo_asset.h"
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 
@@ -16,68 +18,125 @@ namespace uvpress::cli {
 
 namespace {
 
+// One primitive that samples a baseColor texture (not tiled), with that texture.
 struct Workload {
-  std::string name;
   io::Primitive primitive;
   int tex_coord = 0;
   Image texture;
   std::vector<float> luminance;
 };
 
-// The first primitive sampling a baseColor texture, with that texture.
-Workload load_workload(const std::string& spec) {
+struct AssetWork {
+  std::string name;
+  std::vector<Workload> parts;
+};
+
+// Every textured primitive of an asset: each (primitive, UV set) that a baseColor image
+// samples, once.
+AssetWork load_asset(const std::string& spec) {
   io::GltfFile file = spec == "demo" ? pipeline::make_demo_asset() : io::load_gltf(spec);
   io::Asset asset = io::build_asset(file);
+  AssetWork a;
+  a.name = spec == "demo" ? "demo" : std::filesystem::path(spec).stem().string();
+  std::vector<std::pair<int, int>> seen;
   for (const auto& image : asset.images)
-    for (const auto& use : image.uses)
-      if (use.role == io::TextureRole::BaseColor && !use.tiled) {
-        Workload w;
-        w.name = spec == "demo" ? "demo" : std::filesystem::path(spec).stem().string();
-        w.primitive = asset.primitives[size_t(use.primitive)];
-        w.tex_coord = use.tex_coord;
-        w.texture = io::decode_image(file.image_bytes[size_t(image.index)], spec);
-        w.luminance = perceptual::luminance_plane(w.texture);
-        return w;
-      }
-  throw InputError(spec, "no primitive samples a baseColor texture");
+    for (const auto& use : image.uses) {
+      if (use.role != io::TextureRole::BaseColor || use.tiled) continue;
+      if (std::find(seen.begin(), seen.end(), std::pair{use.primitive, use.tex_coord}) != seen.end()) continue;
+      seen.push_back({use.primitive, use.tex_coord});
+      Workload w;
+      w.primitive = asset.primitives[size_t(use.primitive)];
+      w.tex_coord = use.tex_coord;
+      w.texture = io::decode_image(file.image_bytes[size_t(image.index)], spec);
+      w.luminance = perceptual::luminance_plane(w.texture);
+      a.parts.push_back(std::move(w));
+    }
+  if (a.parts.empty()) throw InputError(spec, "no primitive samples a baseColor texture");
+  return a;
 }
 
-void bench_triangles(const Globals& g, const std::vector<std::string>& assets, uint32_t limit, int evaluations) {
-  std::vector<Workload> work;
-  for (const auto& a : assets) work.push_back(load_workload(a));
+double quantile(std::vector<double> v, double q) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  return v[size_t(std::min<double>(double(v.size() - 1), std::floor(q * double(v.size() - 1) + 0.5)))];
+}
+
+void bench_triangles(const Globals& g, const std::vector<std::string>& specs, uint32_t limit, int evaluations,
+                     bool early_stop) {
+  std::vector<AssetWork> work;
+  for (const auto& a : specs) work.push_back(load_asset(a));
   auto backends = available_backends(g);
-  for (const auto& w : work) {
-    const io::Primitive& p = w.primitive;
-    perceptual::TriangleViewInput in{p.positions.data(), p.vertex_count(), p.indices.data(), p.triangle_count(),
-                                     p.uv_sets[size_t(w.tex_coord)].uv.data(), w.texture.width, w.texture.height};
-    // An even sample across the mesh when limited.
-    std::vector<uint32_t> which;
-    const uint32_t n = uint32_t(p.triangle_count());
-    const uint32_t take = limit ? std::min(limit, n) : n;
-    for (uint32_t k = 0; k < take; ++k) which.push_back(uint32_t(uint64_t(k) * n / take));
-    perceptual::TriangleStageOptions o;
-    o.evaluations = evaluations;
-    o.early_stop = false;  // the benchmark's figure is per 100 evaluations
+  for (const auto& a : work) {
+    size_t total = 0;
+    for (const auto& w : a.parts) total += w.primitive.triangle_count();
+    const size_t take = limit ? std::min<size_t>(limit, total) : total;
     for (auto& b : backends) {
-      perceptual::TriangleStageStats stats;
-      auto results = perceptual::optimize_triangles(*b.engine, in, w.luminance, o, which, &stats);
-      size_t feasible = 0;
-      for (auto& r : results) feasible += r.gmsd < o.epsilon;
+      perceptual::TriangleStageOptions o;  // what reparam runs by default
+      o.evaluations = evaluations;
+      o.early_stop = early_stop;
+      perceptual::TriangleStageStats sum;
+      size_t triangles = 0, identity_lossless = 0, resolved = 0, complete = 0, feasible = 0, coarse = 0, views = 0;
+      size_t evals = 0;
+      std::vector<double> shrink_cost, lambda_area;
+      size_t first = 0;  // of the current part, in the asset's triangle order
+      for (const auto& w : a.parts) {
+        const io::Primitive& p = w.primitive;
+        const size_t n = p.triangle_count();
+        // An even sample across all of the asset's triangles when limited.
+        std::vector<uint32_t> which;
+        for (size_t k = 0; k < take; ++k) {
+          const size_t t = k * total / take;
+          if (t >= first && t < first + n) which.push_back(uint32_t(t - first));
+        }
+        first += n;
+        if (which.empty()) continue;
+        perceptual::TriangleViewInput in{p.positions.data(), p.vertex_count(), p.indices.data(), p.triangle_count(),
+                                         p.uv_sets[size_t(w.tex_coord)].uv.data(), w.texture.width, w.texture.height};
+        perceptual::TriangleStageStats stats;
+        auto results = perceptual::optimize_triangles(*b.engine, in, w.luminance, o, which, &stats);
+        auto half = perceptual::measure_triangles(*b.engine, in, w.luminance, o, {0.5, 0, 0, 0.5}, which);
+        sum.wall_seconds += stats.wall_seconds, sum.host_seconds += stats.host_seconds;
+        sum.device_seconds += stats.device_seconds, sum.evaluations += stats.evaluations;
+        sum.view_scores += stats.view_scores, sum.rounds += stats.rounds;
+        for (size_t k = 0; k < results.size(); ++k) {
+          const auto& r = results[k];
+          ++triangles;
+          identity_lossless += r.identity_gmsd < 1e-3;
+          resolved += r.texels_per_pixel <= 1.0 + 1e-6;
+          complete += r.complete;
+          feasible += r.feasible && r.gmsd < o.epsilon;  // from the loss measured at the returned J
+          coarse += r.identity_lattice > 1;
+          views += size_t(r.views);
+          evals += size_t(r.evaluations);
+          shrink_cost.push_back(half[k] - r.identity_gmsd);
+          lambda_area.push_back(r.lambda1 * r.lambda2);
+        }
+      }
       auto d = b.engine->device();
+      const double T = double(std::max<size_t>(triangles, 1));
       nlohmann::ordered_json line = {{"bench", "triangles"},
-                                     {"asset", w.name},
+                                     {"asset", a.name},
                                      {"backend", d.backend},
                                      {"device", d.name},
-                                     {"triangles", results.size()},
-                                     {"mesh_triangles", n},
-                                     {"evals_per_triangle", evaluations},
-                                     {"triangles_per_s", double(results.size()) / stats.wall_seconds},
-                                     {"wall_s", stats.wall_seconds},
-                                     {"host_s", stats.host_seconds},
-                                     {"device_s", stats.device_seconds},
-                                     {"evaluations", stats.evaluations},
-                                     {"rounds", stats.rounds},
-                                     {"feasible", feasible}};
+                                     {"triangles", triangles},
+                                     {"mesh_triangles", total},
+                                     {"evals_per_triangle", double(evals) / T},
+                                     {"early_stop", early_stop},
+                                     {"triangles_per_s", double(triangles) / std::max(sum.wall_seconds, 1e-9)},
+                                     {"wall_s", sum.wall_seconds},
+                                     {"host_s", sum.host_seconds},
+                                     {"device_s", sum.device_seconds},
+                                     {"views_per_triangle", double(views) / T},
+                                     {"view_scores", sum.view_scores},
+                                     {"identity_lossless", double(identity_lossless) / T},
+                                     {"views_resolve_texels", double(resolved) / T},
+                                     {"triangles_fully_viewed", double(complete) / T},
+                                     {"tiles_coarsened", double(coarse) / T},
+                                     {"feasible", double(feasible) / T},
+                                     {"shrink_cost_p50", quantile(shrink_cost, 0.5)},
+                                     {"shrink_cost_p75", quantile(shrink_cost, 0.75)},
+                                     {"lambda_area_quartiles",
+                                      {quantile(lambda_area, 0.25), quantile(lambda_area, 0.5), quantile(lambda_area, 0.75)}}};
       std::printf("%s\n", line.dump().c_str());
       std::fflush(stdout);
     }
@@ -91,12 +150,14 @@ void add_bench_triangles(CLI::App& bench, Globals& g) {
   auto assets = std::make_shared<std::vector<std::string>>(std::vector<std::string>{"demo"});
   auto limit = std::make_shared<uint32_t>(1024);
   auto evaluations = std::make_shared<int>(100);
+  auto early_stop = std::make_shared<bool>(false);
   cmd->add_option("--asset", *assets, "'demo' or a glTF file (several allowed)")->capture_default_str();
-  cmd->add_option("--triangles", *limit, "Triangles per asset, spread evenly (0: all)")->capture_default_str();
+  cmd->add_option("--triangles", *limit, "Triangles per asset over every textured primitive, spread evenly (0: all)")->capture_default_str();
   cmd->add_option("--evaluations", *evaluations, "Evaluations per triangle")->capture_default_str()->check(CLI::Range(11, 1000));
-  cmd->callback([&g, assets, limit, evaluations] {
-    g.action = [&g, assets, limit, evaluations] {
-      bench_triangles(g, *assets, *limit, *evaluations);
+  cmd->add_flag("--early-stop", *early_stop, "Stop a triangle's search when it stalls (off: reparam's default)");
+  cmd->callback([&g, assets, limit, evaluations, early_stop] {
+    g.action = [&g, assets, limit, evaluations, early_stop] {
+      bench_triangles(g, *assets, *limit, *evaluations, *early_stop);
       return 0;
     };
   });
