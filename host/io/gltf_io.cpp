@@ -108,7 +108,7 @@ bool no_write(std::string* err, const std::string&, const std::vector<unsigned c
 std::string image_label(const tinygltf::Image& image, size_t i) {
   return image.uri.empty() || image.uri.rfind("data:", 0) == 0
              ? "image " + std::to_string(i)
-             : "image " + std::to_string(i) + " ('" + image.uri.substr(0, 64) + "')";
+             : "image " + std::to_string(i) + " ('" + shown_uri(image.uri) + "')";
 }
 
 bool looks_binary(const std::vector<uint8_t>& head) {

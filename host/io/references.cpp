@@ -49,14 +49,6 @@ int hex_digit(char c) {
   return -1;
 }
 
-// The URI as an error line can show it: printable, and short.
-std::string shown(const std::string& uri) {
-  std::string s = uri.size() > 80 ? uri.substr(0, 77) + "..." : uri;
-  for (auto& c : s)
-    if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) c = '?';
-  return s;
-}
-
 bool starts_with(const fs::path& path, const fs::path& folder) {
   auto p = path.begin();
   for (auto f = folder.begin(); f != folder.end(); ++f, ++p)
@@ -137,6 +129,13 @@ std::vector<uint8_t> RegularFile::read_all() {
   return bytes;
 }
 
+std::string shown_uri(const std::string& uri) {
+  std::string s = uri.size() > 80 ? uri.substr(0, 77) + "..." : uri;
+  for (auto& c : s)
+    if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) c = '?';
+  return s;
+}
+
 std::string percent_decode(const std::string& uri) {
   std::string out;
   out.reserve(uri.size());
@@ -155,7 +154,7 @@ std::string percent_decode(const std::string& uri) {
 }
 
 OpenRef open_ref(const std::string& asset_path, const ExternalRef& ref, const RefPolicy& policy) {
-  const std::string name = ref.what + ": '" + shown(ref.uri) + "'";
+  const std::string name = ref.what + ": '" + shown_uri(ref.uri) + "'";
   auto fail = [&](const std::string& reason) { return InputError(asset_path, name + " " + reason); };
   std::string decoded;
   try {

@@ -66,7 +66,12 @@ class RegularFile {
 };
 
 // "%2e%2E/x" -> "../x". Throws std::invalid_argument for a malformed escape or a NUL byte.
+// '+' stays '+' (RFC 3986; tinygltf would look for a space instead: such a file is then
+// not among the checked ones and is refused, never read unchecked).
 std::string percent_decode(const std::string& uri);
+
+// A URI as one error line can show it: control characters replaced, at most 80 characters.
+std::string shown_uri(const std::string& uri);
 
 // A checked, open reference: `path` is where it resolved (canonical), `file` is open and
 // within the size limits, nothing read yet.

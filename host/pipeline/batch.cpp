@@ -56,6 +56,7 @@ uint64_t fnv1a(uint64_t h, const void* data, size_t n) {
 // The files that make up an output asset: the main file and, for .gltf, its sidecars.
 std::vector<fs::path> asset_files(const fs::path& path) {
   std::vector<fs::path> files = {path};
+  if (io::extension_of(path.string()) != ".gltf") return files;  // uvpress's .glb outputs hold everything
   try {
     for (const auto& ref : io::external_refs(io::read_file(path.string()))) files.push_back(path.parent_path() / ref.uri);
   } catch (const InputError&) {
