@@ -1,12 +1,12 @@
 #include "io/atomic_file.h"
 
 #include "core/error.h"
+#include "io/references.h"
 
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
-#include <fstream>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -52,17 +52,11 @@ void AtomicWriter::commit() {
 }
 
 std::vector<uint8_t> read_file(const std::string& path) {
-  std::error_code ec;
-  if (!fs::exists(path, ec)) throw InputError(path, "file not found");
-  if (fs::is_directory(path, ec)) throw InputError(path, "is a directory, not a file");
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path, "cannot open for reading");
-  in.seekg(0, std::ios::end);
-  std::streamoff size = in.tellg();
-  in.seekg(0);
-  std::vector<uint8_t> bytes(size_t(std::max<std::streamoff>(size, 0)));
-  if (!bytes.empty() && !in.read(reinterpret_cast<char*>(bytes.data()), size)) throw InputError(path, "read failed");
-  return bytes;
+  RegularFile file(path, path);
+  if (file.size() > kMaxInputFileBytes)
+    throw InputError(path, "is " + std::to_string(file.size()) + " bytes, more than the " +
+                               std::to_string(kMaxInputFileBytes) + " uvpress reads for one file");
+  return file.read_all();
 }
 
 std::string extension_of(const std::string& path) {

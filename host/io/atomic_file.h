@@ -29,7 +29,11 @@ class AtomicWriter {
   std::vector<Entry> entries_;
 };
 
-// Reads a whole file. Throws InputError(path, "file not found" / reason).
+// The most read_file reads (tinygltf takes sizes as 32 bits; a .glb cannot be larger).
+constexpr uint64_t kMaxInputFileBytes = 0xffffffffu;
+
+// Reads a whole regular file of at most kMaxInputFileBytes. Throws InputError(path,
+// "not found" / reason); a FIFO or device is refused, never opened.
 std::vector<uint8_t> read_file(const std::string& path);
 
 // Lower-case extension with the dot (".glb"), or "" when there is none.

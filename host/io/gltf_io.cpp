@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <map>
 #include <set>
 #include <sstream>
 
@@ -59,19 +60,72 @@ bool skip_image_write(const std::string*, const std::string*, const tinygltf::Im
   return false;
 }
 
+// The asset's external files, checked (references.h) and read before tinygltf runs. Its
+// file callbacks serve these bytes and nothing else: whatever path tinygltf builds from a
+// URI (it also tries the current folder), it cannot reach a file that was not checked.
+struct CheckedFiles {
+  std::map<std::string, std::vector<uint8_t>> by_path;  // canonical path -> bytes
+};
+
+CheckedFiles read_references(const std::string& path, const std::vector<uint8_t>& bytes, const RefPolicy& policy) {
+  CheckedFiles files;
+  for (const ExternalRef& ref : external_refs(bytes)) {
+    OpenRef open = open_ref(path, ref, policy);
+    auto& slot = files.by_path[open.path.string()];
+    if (slot.empty()) slot = open.file.read_all();  // one read for a file named twice
+  }
+  return files;
+}
+
+const std::vector<uint8_t>* checked(const std::string& path, void* user) {
+  std::error_code ec;
+  const std::string key = fs::weakly_canonical(path, ec).string();
+  auto& files = static_cast<CheckedFiles*>(user)->by_path;
+  auto it = ec ? files.end() : files.find(key);
+  return it == files.end() ? nullptr : &it->second;
+}
+
+bool checked_exists(const std::string& path, void* user) { return checked(path, user) != nullptr; }
+
+bool read_checked(std::vector<unsigned char>* out, std::string* err, const std::string& path, void* user) {
+  const auto* bytes = checked(path, user);
+  if (!bytes) {
+    if (err) *err = "not a checked reference";
+    return false;
+  }
+  *out = *bytes;
+  return true;
+}
+
+// No '~' or variable expansion: a URI is a path relative to the asset, nothing more.
+std::string no_expansion(const std::string& path, void*) { return path; }
+
+bool no_write(std::string* err, const std::string&, const std::vector<unsigned char>&, void*) {
+  if (err) *err = "uvpress writes its outputs itself";
+  return false;
+}
+
+std::string image_label(const tinygltf::Image& image, size_t i) {
+  return image.uri.empty() || image.uri.rfind("data:", 0) == 0
+             ? "image " + std::to_string(i)
+             : "image " + std::to_string(i) + " ('" + shown_uri(image.uri) + "')";
+}
+
 bool looks_binary(const std::vector<uint8_t>& head) {
   return head.size() >= 4 && head[0] == 'g' && head[1] == 'l' && head[2] == 'T' && head[3] == 'F';
 }
 
 }  // namespace
 
-GltfFile load_gltf(const std::string& path) {
+GltfFile load_gltf(const std::string& path, const RefPolicy& refs) {
   std::vector<uint8_t> bytes = read_file(path);
   if (bytes.empty()) throw InputError(path, "file is empty");
   GltfFile file;
   file.path = path;
 
+  CheckedFiles files = read_references(path, bytes, refs);
   tinygltf::TinyGLTF loader;
+  loader.SetFsCallbacks({&checked_exists, &no_expansion, &read_checked, &no_write, &files});
   loader.SetImageLoader(&keep_image_bytes, &file.image_bytes);
   loader.SetStoreOriginalJSONForExtrasAndExtensions(false);
   std::string err, warn;
@@ -107,11 +161,14 @@ GltfFile load_gltf(const std::string& path) {
     file.image_bytes[i].assign(data.begin() + long(view.byteOffset), data.begin() + long(view.byteOffset + view.byteLength));
   }
   for (size_t i = 0; i < file.model.images.size(); ++i) {
-    if (!file.image_bytes[i].empty()) continue;
     const auto& image = file.model.images[i];
-    std::string what = image.uri.empty() ? "image " + std::to_string(i)
-                                         : "image " + std::to_string(i) + " ('" + image.uri.substr(0, 64) + "')";
-    throw InputError(path, what + " is missing or empty");
+    if (file.image_bytes[i].empty()) throw InputError(path, image_label(image, i) + " is missing or empty");
+    // Untouched images are written back byte for byte: carry only what is the image it claims.
+    try {
+      check_image(file.image_bytes[i], image.mimeType, path);
+    } catch (const InputError& e) {
+      throw InputError(path, image_label(image, i) + ": " + e.what());
+    }
   }
   return file;
 }

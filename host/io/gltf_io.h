@@ -3,6 +3,8 @@
 // is kept whole, images stay in their encoded form (no re-encoding of untouched textures).
 #pragma once
 
+#include "io/references.h"
+
 #include <tiny_gltf.h>
 
 #include <cstdint>
@@ -24,7 +26,9 @@ bool is_supported_required_extension(const std::string& name);
 
 // Throws InputError(path, reason) for anything unreadable: a missing file, bad JSON or
 // binary layout, broken resources, a missing image, an unsupported required extension.
-GltfFile load_gltf(const std::string& path);
+// External files are read only as `refs` allows (references.h), and every image, kept byte
+// for byte, must pass check_image (a header that decodes, its mimeType, its size).
+GltfFile load_gltf(const std::string& path, const RefPolicy& refs = {});
 
 // Writes by extension: .glb (one binary chunk holding every buffer and image) or .gltf
 // (pretty JSON plus <stem>.bin and one file per image beside it). All files are written

@@ -5,6 +5,7 @@
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
 
+#include <array>
 #include <cstdio>
 #include <cstring>
 #include <fcntl.h>
@@ -110,6 +111,27 @@ std::unique_ptr<oiio::ImageInput> open_memory(const std::vector<uint8_t>& bytes,
 
 uint32_t bits_of(const oiio::ImageSpec& s) { return s.format.size() >= 2 ? 16 : 8; }
 
+uint32_t le(const std::vector<uint8_t>& b, size_t at, int bytes) {
+  uint32_t v = 0;
+  for (int k = bytes - 1; k >= 0; --k) v = v << 8 | b[at + size_t(k)];
+  return v;
+}
+
+// Width and height from a KTX2 or WebP header ({0, 0} when the header is cut short or
+// unknown): uvpress does not decode these, it only carries them.
+std::array<uint32_t, 2> declared_size(const std::vector<uint8_t>& b, const std::string& format) {
+  if (format == "ktx2") return b.size() >= 80 ? std::array<uint32_t, 2>{le(b, 20, 4), le(b, 24, 4)} : std::array<uint32_t, 2>{0, 0};
+  // WebP: RIFF....WEBP then a VP8 (lossy), VP8L (lossless) or VP8X (extended) chunk.
+  if (b.size() >= 30 && std::memcmp(&b[12], "VP8X", 4) == 0) return {le(b, 24, 3) + 1, le(b, 27, 3) + 1};
+  if (b.size() >= 25 && std::memcmp(&b[12], "VP8L", 4) == 0 && b[20] == 0x2f) {
+    const uint32_t bits = le(b, 21, 4);
+    return {(bits & 0x3fff) + 1, (bits >> 14 & 0x3fff) + 1};
+  }
+  if (b.size() >= 30 && std::memcmp(&b[12], "VP8 ", 4) == 0 && b[23] == 0x9d && b[24] == 0x01 && b[25] == 0x2a)
+    return {le(b, 26, 2) & 0x3fff, le(b, 28, 2) & 0x3fff};
+  return {0, 0};
+}
+
 }  // namespace
 
 ImageHeader read_image_header(const std::vector<uint8_t>& bytes, const std::string& name) {
@@ -120,6 +142,24 @@ ImageHeader read_image_header(const std::vector<uint8_t>& bytes, const std::stri
   const auto& s = in->spec();
   h.width = uint32_t(s.width), h.height = uint32_t(s.height), h.channels = uint32_t(s.nchannels), h.bits = bits_of(s);
   return h;
+}
+
+void check_image(const std::vector<uint8_t>& bytes, const std::string& mime_type, const std::string& name) {
+  const std::string format = sniff_image_format(bytes.data(), bytes.size());
+  if (format != "png" && format != "jpeg" && format != "ktx2" && format != "webp")
+    throw InputError(name, "is not a PNG, JPEG, KTX2 or WebP image (" + (format.empty() ? "unrecognized" : format) + " data)");
+  const bool jpg_alias = format == "jpeg" && mime_type == "image/jpg";  // common in the wild
+  if (!mime_type.empty() && mime_type != mime_of_format(format) && !jpg_alias)
+    throw InputError(name, "holds " + format + " data, but its mimeType says '" + mime_type.substr(0, 40) + "'");
+  if (format == "png" || format == "jpeg") {
+    read_image_header(bytes, name);  // opens the header with the decoder that re-bakes it
+    return;
+  }
+  const auto [w, h] = declared_size(bytes, format);
+  if (w == 0 || h == 0) throw InputError(name, "corrupt " + format + " image (no readable size in its header)");
+  if (w > kMaxImageSide || h > kMaxImageSide)
+    throw InputError(name, "image declares " + std::to_string(w) + "x" + std::to_string(h) + ", larger than the supported " +
+                               std::to_string(kMaxImageSide) + " per side");
 }
 
 Image decode_image(const std::vector<uint8_t>& bytes, const std::string& name) {

@@ -26,6 +26,11 @@ constexpr uint32_t kMaxImageSide = 16384;
 
 // `name` labels errors (the asset file and image index). Throws InputError.
 ImageHeader read_image_header(const std::vector<uint8_t>& bytes, const std::string& name);
+
+// For images carried byte for byte: throws InputError(name, reason) unless `bytes` are a
+// PNG, JPEG, KTX2 or WebP image whose header reads, whose sides are within kMaxImageSide,
+// and whose format is the one `mime_type` names (when it names one). Decodes no pixels.
+void check_image(const std::vector<uint8_t>& bytes, const std::string& mime_type, const std::string& name);
 Image decode_image(const std::vector<uint8_t>& bytes, const std::string& name);
 
 // Encodes as "png" (8 or 16 bit, as image.bits says) or "jpeg" (8 bit, quality 95).

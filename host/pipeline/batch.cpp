@@ -53,41 +53,14 @@ uint64_t fnv1a(uint64_t h, const void* data, size_t n) {
   return h;
 }
 
-bool hash_file(const fs::path& path, uint64_t& h) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return false;
-  std::vector<char> buf(1 << 20);
-  while (in) {
-    in.read(buf.data(), std::streamsize(buf.size()));
-    h = fnv1a(h, buf.data(), size_t(in.gcount()));
-  }
-  return in.eof();
-}
-
-// The local files a .gltf names (buffers and images), relative to its folder.
-std::vector<std::string> referenced_files(const fs::path& gltf) {
-  std::vector<std::string> out;
-  try {
-    std::ifstream in(gltf);
-    json j = json::parse(in);
-    for (const char* key : {"buffers", "images"}) {
-      if (!j.contains(key) || !j[key].is_array()) continue;
-      for (const auto& e : j[key])
-        if (e.is_object() && e.contains("uri") && e["uri"].is_string()) {
-          std::string uri = e["uri"].get<std::string>();
-          if (uri.rfind("data:", 0) != 0 && uri.find("://") == std::string::npos) out.push_back(uri);
-        }
-    }
-  } catch (const std::exception&) {
-  }
-  return out;
-}
-
 // The files that make up an output asset: the main file and, for .gltf, its sidecars.
 std::vector<fs::path> asset_files(const fs::path& path) {
   std::vector<fs::path> files = {path};
-  if (io::extension_of(path.string()) == ".gltf")
-    for (const auto& uri : referenced_files(path)) files.push_back(path.parent_path() / uri);
+  if (io::extension_of(path.string()) != ".gltf") return files;  // uvpress's .glb outputs hold everything
+  try {
+    for (const auto& ref : io::external_refs(io::read_file(path.string()))) files.push_back(path.parent_path() / ref.uri);
+  } catch (const InputError&) {
+  }
   return files;
 }
 
@@ -223,14 +196,25 @@ std::vector<BatchItem> select_shard(const std::vector<BatchItem>& items, size_t 
   return out;
 }
 
-std::string hash_asset(const std::string& path) {
-  uint64_t h = 0xcbf29ce484222325ull;
-  if (!hash_file(path, h)) return "";
-  if (io::extension_of(path) == ".gltf")
-    for (const auto& uri : referenced_files(path)) {
-      h = fnv1a(h, uri.data(), uri.size() + 1);
-      hash_file(fs::path(path).parent_path() / uri, h);  // a missing one fails the load anyway
+std::string hash_asset(const std::string& path, const io::RefPolicy& refs) {
+  std::vector<uint8_t> bytes;
+  try {
+    bytes = io::read_file(path);
+  } catch (const InputError&) {
+    return "";
+  }
+  uint64_t h = fnv1a(0xcbf29ce484222325ull, bytes.data(), bytes.size());
+  for (const auto& ref : io::external_refs(bytes)) {
+    h = fnv1a(h, ref.uri.data(), ref.uri.size() + 1);
+    try {
+      io::OpenRef open = io::open_ref(path, ref, refs);  // the loader's rule: no hang, no huge read
+      open.file.read_chunks([&](const uint8_t* p, size_t n) { h = fnv1a(h, p, n); });
+    } catch (const InputError& e) {
+      // The load fails with this same line; hashing it makes a fixed reference a new input.
+      const std::string why = e.what();
+      h = fnv1a(h, why.data(), why.size() + 1);
     }
+  }
   return to_hex(h);
 }
 
@@ -239,7 +223,8 @@ json options_json(const BatchOptions& o) {
   json j = {{"uvpress", o.version}, {"format", o.format}, {"cost", r.size ? json(nullptr) : json(r.cost)},
             {"size", r.size}, {"max_gmsd", r.max_gmsd}, {"pot", r.power_of_two}, {"gutter", r.gutter}, {"block", r.block},
             {"optimize", r.optimize}, {"epsilon", r.triangle.epsilon}, {"evaluations", r.triangle.evaluations},
-            {"view_size", r.triangle.view_size}, {"seed", r.triangle.seed}, {"eval", o.eval}};
+            {"view_size", r.triangle.view_size}, {"seed", r.triangle.seed}, {"eval", o.eval},
+            {"allow_outside_refs", o.refs.allow_outside}};
   if (o.eval) j["eval_options"] = {{"cost_grid", o.eval_options.cost_grid}, {"resolution", o.eval_options.resolution}};
   return j;
 }
@@ -253,7 +238,7 @@ std::string summary_path(const BatchOptions& o) {
 bool up_to_date(const BatchItem& item, const BatchOptions& o) {
   json r = read_json(report_path(item, o));
   if (!r.is_object() || r.value("status", "") != "ok") return false;
-  if (r.value("input_hash", "") != hash_asset(item.input)) return false;
+  if (r.value("input_hash", "") != hash_asset(item.input, o.refs)) return false;
   if (!r.contains("options") || r["options"] != options_json(o)) return false;
   if (r.value("output_hash", "") != hash_asset(output_path(item, o).string())) return false;
   if (o.eval && !read_json(eval_path(item, o)).is_object()) return false;
@@ -264,12 +249,12 @@ json process_asset(const BatchItem& item, const BatchOptions& o, engine::Engine*
   const auto t0 = Clock::now();
   const fs::path out = output_path(item, o);
   json report = {{"name", item.name}, {"input", item.input}, {"position", item.position},
-                 {"input_hash", hash_asset(item.input)}, {"options", options_json(o)}};
+                 {"input_hash", hash_asset(item.input, o.refs)}, {"options", options_json(o)}};
   try {
     if (!engine) throw engine::EngineError(engine_error.empty() ? "no engine" : engine_error);
     std::error_code ec;
     report["input_bytes"] = fs::file_size(item.input, ec);
-    io::GltfFile file = io::load_gltf(item.input);
+    io::GltfFile file = io::load_gltf(item.input, o.refs);
     auto r = reparam(file, *engine, o.reparam);
     io::save_gltf(file, out.string());
     report["output"] = out.string();
@@ -281,7 +266,7 @@ json process_asset(const BatchItem& item, const BatchOptions& o, engine::Engine*
     report["warnings"] = r["warnings"];
     report["reparam"] = r;
     if (o.eval) {
-      io::GltfFile reference = io::load_gltf(item.input);
+      io::GltfFile reference = io::load_gltf(item.input, o.refs);
       io::GltfFile result = io::load_gltf(out.string());
       eval::EvalOptions eo = o.eval_options;
       eo.artifacts = false;
@@ -428,7 +413,7 @@ json run_batch(const BatchOptions& o, const EngineFactory& make_engine, const Ba
         std::string why = WIFSIGNALED(status) ? "crashed with " + signal_name(WTERMSIG(status))
                                               : "worker exited with status " + std::to_string(WEXITSTATUS(status));
         json r = {{"name", item.name}, {"input", item.input}, {"position", item.position},
-                  {"input_hash", hash_asset(item.input)}, {"options", options_json(o)}, {"status", "failed"},
+                  {"input_hash", hash_asset(item.input, o.refs)}, {"options", options_json(o)}, {"status", "failed"},
                   {"error", item.input + ": " + why}};
         remove_outputs(item, o);
         try {
@@ -447,7 +432,7 @@ json run_batch(const BatchOptions& o, const EngineFactory& make_engine, const Ba
   // The summary from the reports on disk (the workers' results).
   for (const auto& it : todo) {
     json r = read_json(report_path(it, o));
-    if (!r.is_object() || r.value("input_hash", "") != hash_asset(it.input) || !r.contains("status"))
+    if (!r.is_object() || r.value("input_hash", "") != hash_asset(it.input, o.refs) || !r.contains("status"))
       r = {{"name", it.name}, {"input", it.input}, {"status", "failed"}, {"error", it.input + ": no report was written"}};
     rows[it.position] = summary_row(r, r["status"].get<std::string>());
   }
@@ -472,7 +457,7 @@ json collect_batch(const BatchOptions& o) {
       continue;
     }
     std::string status = r["status"].get<std::string>();
-    if (status == "ok" && (r.value("input_hash", "") != hash_asset(it.input) ||
+    if (status == "ok" && (r.value("input_hash", "") != hash_asset(it.input, o.refs) ||
                            r.value("output_hash", "") != hash_asset(output_path(it, o).string()))) {
       status = "stale";
       r["error"] = "the input or output changed since the report was written";

@@ -24,6 +24,7 @@
 
 #include "engine.h"
 #include "eval/eval.h"
+#include "io/references.h"
 #include "pipeline/reparam.h"
 
 #include <nlohmann/json.hpp>
@@ -58,9 +59,10 @@ ShardSpec shard_from_environment(const std::function<const char*(const char*)>& 
 // The assets of shard `index` of `count`. Throws std::invalid_argument when index >= count.
 std::vector<BatchItem> select_shard(const std::vector<BatchItem>& items, size_t index, size_t count);
 
-// FNV-1a 64 (hex) over a file and, for .gltf, every local file its buffers and images
-// name. "" when the file cannot be read.
-std::string hash_asset(const std::string& path);
+// FNV-1a 64 (hex) over a file and every file its buffers and images name (.gltf or .glb),
+// read only as `refs` allows (io/references.h: no FIFO, device or oversized file is read; a
+// refused reference adds its error line instead). "" when the file cannot be read.
+std::string hash_asset(const std::string& path, const io::RefPolicy& refs = {});
 
 struct BatchOptions {
   std::string manifest;
@@ -74,6 +76,7 @@ struct BatchOptions {
   bool force = false;    // ignore earlier results
   bool isolate = true;   // false: run in this process, one asset after another (tests)
   std::string version;   // recorded in the reports (and part of the options compared)
+  io::RefPolicy refs;    // --allow-outside-refs, for loading and hashing inputs (recorded)
 };
 
 // The options as recorded in each report and compared on resume.

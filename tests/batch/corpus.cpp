@@ -13,6 +13,7 @@
 #include <fstream>
 #include <functional>
 #include <limits>
+#include <sys/stat.h>
 
 namespace uvpress::test {
 
@@ -58,6 +59,10 @@ std::vector<uint8_t> png_header_only(uint32_t width, uint32_t height) {
   return b;
 }
 
+void put_le32(std::vector<uint8_t>& b, uint32_t v) {
+  for (int s = 0; s < 32; s += 8) b.push_back(uint8_t(v >> s));
+}
+
 // Pointer to component c of element i of a float or uint16 accessor in the model.
 uint8_t* element(tinygltf::Model& m, int accessor, size_t i, size_t c, size_t component_size) {
   const auto& a = m.accessors[size_t(accessor)];
@@ -74,6 +79,35 @@ void set_index(tinygltf::Model& m, int accessor, size_t i, uint16_t value) {
 }
 
 }  // namespace
+
+std::vector<uint8_t> png_with_text(std::vector<uint8_t> png, const std::string& text) {
+  std::vector<uint8_t> chunk;
+  put_be32(chunk, uint32_t(8 + text.size()));
+  const size_t type_at = chunk.size();
+  for (char c : std::string("tEXtComment", 11)) chunk.push_back(uint8_t(c));
+  chunk.push_back(0);
+  chunk.insert(chunk.end(), text.begin(), text.end());
+  put_be32(chunk, crc32(&chunk[type_at], chunk.size() - type_at));
+  png.insert(png.begin() + 33, chunk.begin(), chunk.end());  // after the signature and IHDR
+  return png;
+}
+
+std::vector<uint8_t> make_glb(const std::string& json_text, const std::vector<uint8_t>& bin) {
+  std::string j = json_text;
+  j.resize((j.size() + 3) / 4 * 4, ' ');
+  std::vector<uint8_t> b = bin;
+  b.resize((b.size() + 3) / 4 * 4, 0);
+  std::vector<uint8_t> out = {'g', 'l', 'T', 'F'};
+  put_le32(out, 2);
+  put_le32(out, uint32_t(12 + 8 + j.size() + 8 + b.size()));
+  put_le32(out, uint32_t(j.size()));
+  put_le32(out, 0x4E4F534Au);  // JSON
+  out.insert(out.end(), j.begin(), j.end());
+  put_le32(out, uint32_t(b.size()));
+  put_le32(out, 0x004E4942u);  // BIN
+  out.insert(out.end(), b.begin(), b.end());
+  return out;
+}
 
 std::vector<CorpusCase> make_bad_input_corpus(const fs::path& dir) {
   std::vector<CorpusCase> cases;
@@ -269,6 +303,68 @@ std::vector<CorpusCase> make_bad_input_corpus(const fs::path& dir) {
   json_case("image-data-uri-broken", [](json& j) { j["images"][0] = {{"uri", "data:image/png;base64,%%%not-base64"}}; }, "");
   json_case("image-data-uri-empty", [](json& j) { j["images"][0] = {{"uri", "data:image/png;base64,"}}; }, "");
   json_case("image-bufferview-missing", [](json& j) { j["images"][0] = {{"bufferView", 42}, {"mimeType", "image/png"}}; }, "");
+  {
+    // PNG bytes in a bufferView that claims JPEG (tinygltf keeps a mimeType only there).
+    uint32_t json_length;
+    std::memcpy(&json_length, &glb[12], 4);
+    json j = json::parse(glb.begin() + 20, glb.begin() + 20 + json_length);
+    j["images"][0]["mimeType"] = "image/jpeg";
+    const auto bin_at = glb.begin() + 20 + json_length + 8;
+    bytes_case("image-mime-mismatch", ".glb", make_glb(j.dump(), std::vector<uint8_t>(bin_at, glb.end())), "mimeType");
+  }
+
+  // --- References (issue 13): uploads in dir/uploads reaching for files outside it ---
+  const fs::path up = dir / "uploads";
+  fs::create_directories(up);
+  io::save_gltf(good, (up / "good.gltf").string());
+  const std::vector<uint8_t> good_bin = slurp(up / base["buffers"][0]["uri"].get<std::string>());
+  const std::vector<uint8_t> secret_png = png_with_text(good.image_bytes[0], kOutsideMarker);
+  std::vector<uint8_t> secret_bin = good_bin;
+  secret_bin.insert(secret_bin.end(), kOutsideMarker.begin(), kOutsideMarker.end());
+  spit(dir / "secret.png", secret_png);
+  spit(dir / "secret.bin", secret_bin);
+  auto upload_case = [&](const std::string& name, const std::function<void(json&)>& edit, const std::string& reason) {
+    json j = base;
+    edit(j);
+    fs::path f = up / (name + ".gltf");
+    spit(f, j.dump(1));
+    cases.push_back({name, f, reason, false});
+  };
+  auto image_uri = [](const std::string& uri) { return [uri](json& j) { j["images"][0] = {{"uri", uri}}; }; };
+  const std::string outside = "points outside the asset's folder";
+  upload_case("ref-traversal", image_uri("../secret.png"), outside);
+  upload_case("ref-traversal-etc", image_uri("../../../../../../../../../../etc/hostname"), outside);
+  upload_case("ref-absolute", image_uri(fs::absolute(dir / "secret.png").string()), outside);
+  fs::create_symlink(fs::absolute(dir / "secret.png"), up / "link.png");
+  upload_case("ref-symlink-out", image_uri("link.png"), outside);
+  upload_case("ref-percent-encoded", image_uri("..%2Fsecret.png"), outside);
+  upload_case("ref-percent-dots", image_uri("%2e%2e/secret.png"), outside);
+  upload_case("ref-buffer-traversal", [&](json& j) {
+    j["buffers"][0] = {{"uri", "../secret.bin"}, {"byteLength", secret_bin.size()}};
+  }, outside);
+  ::mkfifo((up / "pipe.png").c_str(), 0644);
+  upload_case("ref-fifo", image_uri("pipe.png"), "is a FIFO, not a regular file");
+  ::mkfifo((up / "pipe.bin").c_str(), 0644);
+  upload_case("ref-buffer-fifo", [&](json& j) { j["buffers"][0]["uri"] = "pipe.bin"; }, "is a FIFO, not a regular file");
+  upload_case("ref-folder", image_uri("."), "is a folder, not a regular file");
+  upload_case("ref-bad-escape", image_uri("tex%zz.png"), "percent-escape");
+  spit(up / "notes.png", std::string("these are notes, not pixels\n"));
+  upload_case("ref-not-an-image", image_uri("notes.png"), "not a PNG, JPEG, KTX2 or WebP image");
+  // A sparse 64 GiB file: nothing may read it whole, whatever the buffer declares.
+  const uint64_t huge = uint64_t(64) << 30;
+  spit(up / "huge.bin", std::string());
+  fs::resize_file(up / "huge.bin", huge);
+  upload_case("ref-buffer-huge-sparse", [](json& j) { j["buffers"][0]["uri"] = "huge.bin"; }, "but the buffer declares byteLength");
+  upload_case("ref-buffer-huge-declared", [&](json& j) {
+    j["buffers"][0] = {{"uri", "huge.bin"}, {"byteLength", huge}};
+  }, "uvpress reads for one buffer");
+  {
+    json j = base;  // a .glb whose image is an external file outside
+    j["buffers"][0].erase("uri");
+    j["images"][0] = {{"uri", "../secret.png"}};
+    spit(up / "ref-glb-traversal.glb", make_glb(j.dump(), good_bin));
+    cases.push_back({"ref-glb-traversal", up / "ref-glb-traversal.glb", outside, false});
+  }
   return cases;
 }
 

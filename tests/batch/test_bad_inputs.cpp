@@ -8,6 +8,7 @@
 #include "support.h"
 
 #include <fstream>
+#include <string>
 
 using namespace uvpress;
 using test::run_uvpress;
@@ -20,6 +21,18 @@ std::vector<std::string> entries(const test::fs::path& dir) {
   std::vector<std::string> out;
   for (auto& e : test::fs::directory_iterator(dir)) out.push_back(e.path().filename().string());
   std::sort(out.begin(), out.end());
+  return out;
+}
+
+// Files under `dir` holding the bytes planted outside the uploads folder (issue 13).
+std::vector<std::string> files_with_marker(const test::fs::path& dir) {
+  std::vector<std::string> out;
+  for (auto& e : test::fs::recursive_directory_iterator(dir)) {
+    if (!e.is_regular_file()) continue;
+    std::ifstream in(e.path(), std::ios::binary);
+    const std::string bytes(std::istreambuf_iterator<char>(in), {});
+    if (bytes.find(test::kOutsideMarker) != std::string::npos) out.push_back(e.path().string());
+  }
   return out;
 }
 
@@ -64,6 +77,7 @@ TEST_CASE("bad inputs: each malformed asset fails with one line naming it, or de
     auto output = out_dir / "out.glb";
     check_case(c, "reparam " + quoted(c.file) + " -o " + quoted(output) + " --no-optimize --device cpu", out_dir, output);
     (test::fs::exists(output) ? graceful : failed) += 1;
+    CHECK(files_with_marker(out_dir).empty());
     test::fs::remove_all(out_dir);
     // info reads the same structures without writing anything.
     auto r = run_uvpress("info " + quoted(c.file));
@@ -106,4 +120,93 @@ TEST_CASE("bad inputs: a batch over the whole corpus reports every failure and w
     }
   }
   for (const auto& f : entries(out)) CHECK_FALSE(f.rfind(".", 0) == 0);  // no temporaries left
+  CHECK(files_with_marker(out).empty());  // reports name references, never their bytes
+}
+
+TEST_CASE("bad inputs: copy carries no reference case and no byte from outside the asset's folder", "[batch][corpus]") {
+  // copy keeps every image byte for byte: the command that pulled ../../etc/hostname into
+  // its output before issue 13.
+  test::Scratch dir("corpus-copy");
+  auto corpus = test::make_bad_input_corpus(dir.path());
+  size_t references = 0;
+  for (const auto& c : corpus) {
+    if (c.name.rfind("ref-", 0) != 0 && c.name.rfind("image-", 0) != 0) continue;
+    ++references;
+    auto out_dir = dir / ("out-" + c.name);
+    test::fs::create_directories(out_dir);
+    for (const char* ext : {".gltf", ".glb"}) {
+      auto output = out_dir / (std::string("out") + ext);
+      auto r = run_uvpress("copy " + quoted(c.file) + " -o " + quoted(output));
+      INFO("case " << c.name << ": copy to " << ext << "\nexit " << r.exit_code << "\nstderr: " << r.err);
+      CHECK(r.exit_code == 1);
+      auto lines = r.err_lines();
+      REQUIRE(lines.size() == 1);
+      CHECK_THAT(lines[0], Catch::StartsWith("uvpress: " + c.file.string() + ": ") && Catch::Contains(c.reason));
+      CHECK(entries(out_dir).empty());
+    }
+    test::fs::remove_all(out_dir);
+  }
+  CHECK(references >= 25);
+}
+
+TEST_CASE("bad inputs: --allow-outside-refs restores reading a trusted layout's shared files", "[batch][corpus][cli]") {
+  // A studio layout: assets in their own folders, textures shared in a sibling folder.
+  test::Scratch dir("trusted");
+  test::fs::create_directories(dir / "textures");
+  test::fs::create_directories(dir / "assets");
+  test::fs::create_directories(dir / "out");
+  {
+  }
+  auto corpus_dir = dir / "corpus";
+  test::fs::create_directories(corpus_dir);
+  test::make_bad_input_corpus(corpus_dir);
+  test::fs::copy_file(corpus_dir / "secret.png", dir / "textures" / "shared.png");  // the demo texture + marker
+  nlohmann::json j = nlohmann::json::parse(std::ifstream(corpus_dir / "good.gltf"));
+  test::fs::copy_file(corpus_dir / j["buffers"][0]["uri"].get<std::string>(), dir / "assets" / j["buffers"][0]["uri"].get<std::string>());
+  j["images"][0] = {{"uri", "../textures/shared.png"}};
+  const auto asset = dir / "assets" / "crate.gltf";
+  std::ofstream(asset) << j.dump(1);
+
+  // By default: refused, nothing written.
+  test::check_input_error(dir, "copy " + quoted(asset) + " -o " + quoted(dir / "out" / "crate.glb"), asset,
+                          "image 0: '../textures/shared.png' points outside the asset's folder");
+  CHECK(entries(dir / "out").empty());
+
+  // Opted out: today's behaviour, the shared texture carried byte for byte, a valid asset.
+  for (const std::string& flags : {"--allow-outside-refs copy", "copy --allow-outside-refs"}) {
+    auto r = run_uvpress(flags + " " + quoted(asset) + " -o " + quoted(dir / "out" / "crate.glb"));
+    INFO(flags << ": " << r.err);
+    CHECK(r.exit_code == 0);
+    CHECK(files_with_marker(dir / "out").size() == 1);
+    CHECK(test::validate_gltf(dir / "out" / "crate.glb")["numErrors"] == 0);
+    test::fs::remove(dir / "out" / "crate.glb");
+  }
+
+  // The other checks still hold when opted out: a device is not a file.
+  j["images"][0] = {{"uri", "/dev/zero"}};
+  const auto device = dir / "assets" / "device.gltf";
+  std::ofstream(device) << j.dump(1);
+  test::check_input_error(dir, "--allow-outside-refs copy " + quoted(device) + " -o " + quoted(dir / "out" / "d.glb"), device,
+                          "image 0: '/dev/zero' is a device, not a regular file");
+
+  // batch passes it through and records it: a run with it is not a resume of one without.
+  std::ofstream(dir / "manifest.txt") << "assets/crate.gltf\n";
+  auto batch = [&](const std::string& flag) {
+    return run_uvpress("batch --manifest " + quoted(dir / "manifest.txt") + " -o " + quoted(dir / "batch") +
+                       " --no-optimize --device cpu " + flag);
+  };
+  auto r = batch("");
+  CHECK(r.exit_code == 1);
+  auto report = nlohmann::json::parse(std::ifstream(dir / "batch" / "crate.report.json"));
+  CHECK_THAT(report["error"].get<std::string>(), Catch::Contains("points outside the asset's folder"));
+  CHECK(report["options"]["allow_outside_refs"] == false);
+  r = batch("--allow-outside-refs");
+  INFO(r.out << r.err);
+  CHECK(r.exit_code == 0);
+  report = nlohmann::json::parse(std::ifstream(dir / "batch" / "crate.report.json"));
+  CHECK(report["status"] == "ok");
+  CHECK(report["options"]["allow_outside_refs"] == true);
+  r = batch("--allow-outside-refs");  // resumes: same options, same inputs
+  CHECK(r.exit_code == 0);
+  CHECK_THAT(r.out + r.err, Catch::Contains("skipped"));
 }

@@ -104,6 +104,7 @@ void add_batch(CLI::App& app, Globals& g) {
       pipeline::BatchOptions o = a->o;
       o.reparam.optimize = !a->no_optimize;
       o.version = UVPRESS_VERSION;
+      o.refs = g.refs();  // the global --allow-outside-refs, recorded in every report
       if (!a->grid.empty()) o.eval_options.cost_grid = a->grid;
       if (a->collect) {
         auto summary = pipeline::collect_batch(o);

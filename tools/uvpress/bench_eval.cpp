@@ -21,7 +21,7 @@ void add_bench_eval(CLI::App& bench, Globals& g) {
   cmd->callback([&g, asset, resolution] {
     g.action = [&g, asset, resolution] {
       if (!std::filesystem::exists(*asset)) throw InputError(*asset, "file not found (give --asset PATH)");
-      io::GltfFile file = io::load_gltf(*asset);
+      io::GltfFile file = io::load_gltf(*asset, g.refs());
       eval::EvalOptions o;
       o.resolution = *resolution;
       o.artifacts = false;

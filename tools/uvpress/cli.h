@@ -3,6 +3,7 @@
 #pragma once
 
 #include "engine.h"
+#include "io/references.h"
 
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
@@ -19,10 +20,13 @@ struct Globals {
   std::string device = "auto";  // --device, else UVPRESS_DEVICE, else auto
   std::string report;           // --report FILE.json
   bool validation = false;      // --vulkan-validation, or UVPRESS_VALIDATION=1
+  bool allow_outside_refs = false;  // --allow-outside-refs: trusted layouts only
   std::function<int()> action;  // set by the chosen subcommand's callback
 
   // The engine for --device; prints the choice in verbose mode.
   std::unique_ptr<engine::Engine> make_engine() const;
+  // What an input's buffer and image URIs may name (every load_gltf takes it).
+  io::RefPolicy refs() const { return {allow_outside_refs}; }
   // Writes `report` atomically when --report was given.
   void write_report(const nlohmann::ordered_json& report) const;
   // "-v" stage timing: prints "stage: 12.3 ms" (the time since `since`) on stderr and

@@ -38,10 +38,10 @@ void add_eval(CLI::App& app, Globals& g) {
   cmd->callback([&g, a] {
     g.action = [&g, a] {
       auto t0 = std::chrono::steady_clock::now();
-      io::GltfFile ref = io::load_gltf(a->reference);
+      io::GltfFile ref = io::load_gltf(a->reference, g.refs());
       std::vector<io::GltfFile> files;
       files.reserve(a->others.size());
-      for (const auto& f : a->others) files.push_back(io::load_gltf(f));
+      for (const auto& f : a->others) files.push_back(io::load_gltf(f, g.refs()));
       std::vector<eval::LayoutInput> others;
       for (size_t k = 0; k < files.size(); ++k) {
         std::string name = std::filesystem::path(a->others[k]).stem().string();

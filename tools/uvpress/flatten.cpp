@@ -84,7 +84,7 @@ PrimitiveCharts split_primitive(const io::Primitive& prim) {
 
 void flatten_gltf(const Globals& g, const std::string& input, const std::string& output, const flatten::Options& o,
                   std::vector<Chart>& charts, std::chrono::steady_clock::time_point& t0) {
-  io::GltfFile file = io::load_gltf(input);
+  io::GltfFile file = io::load_gltf(input, g.refs());
   io::Asset asset = io::build_asset(file);
   g.stage("load", t0);
   if (asset.primitives.empty()) throw InputError(input, "no triangle primitives to flatten");

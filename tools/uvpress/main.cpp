@@ -70,6 +70,8 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"auto", "gpu", "lavapipe", "cpu"}));
   app.add_option("--report", g.report, "Write a JSON report of the run to this file");
   app.add_flag("--vulkan-validation", g.validation, "Enable the Khronos validation layer (or UVPRESS_VALIDATION=1)");
+  app.add_flag("--allow-outside-refs", g.allow_outside_refs,
+               "Let buffer and image URIs name files outside the asset's folder (trusted inputs only)");
   cli::add_reparam(app, g);
   cli::add_info(app, g);
   cli::add_copy(app, g);
