@@ -157,10 +157,11 @@ constexpr uint kViewMaxTriangles = 64;    // 1 + one-ring
 constexpr uint kViewGuardBand = 511;      // |screen coordinate| bound: 4 sub-pixel bits keep edge functions in int32
 // Candidate tile, texels per side: a view resolves its texels (at most one texel a pixel,
 // host/perceptual/triangle_view.h), so J (|J| <= 1) maps its S x S pixels into at most
-// S sqrt(2) texels a side, plus the bilinear footprint: 64 sqrt(2) + 3 < 96. A tile that would
-// still be larger (anisotropic UVs, groups that do not fit side by side) falls back to a
-// coarser power-of-two lattice, which the engine reports (score_views' `lattice`).
-constexpr uint kTileMax = 96;
+// S sqrt(2) texels a side, plus the bilinear footprint: 64 sqrt(2) + 3 < 96 for one chart,
+// and 128 leaves room for a seam neighbour's region beside it. A tile that would still be
+// larger (anisotropic UVs, regions that do not fit together) falls back to a coarser
+// power-of-two lattice, which the engine reports (score_views' `lattice`).
+constexpr uint kTileMax = 128;
 constexpr uint kViewMaxGroups = 8;        // charts in one view's ring
 constexpr uint kViewMaxTexelsPerPixel = 64;  // |d(s, t)/d(x, y)| bound of a view triangle's planes
 // view_score.comp's scratch slot per candidate, 32-bit words: 4 per pixel (u, v, candidate,
@@ -183,7 +184,7 @@ static_assert(sizeof(RebakePush) == 64, "push constant layout");
 #define kViewMaxSize 64u
 #define kViewMaxTriangles 64u
 #define kViewGuardBand 511u
-#define kTileMax 96u
+#define kTileMax 128u
 #define kViewMaxGroups 8u
 #define kViewMaxTexelsPerPixel 64u
 #define kNoTriangle 255u

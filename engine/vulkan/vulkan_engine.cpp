@@ -31,6 +31,7 @@ using shader::ViewPush;
 // Words of view_score.comp's scratch slot per candidate (its OFF_* layout).
 constexpr uint64_t kScoreSlotBytes = 4ull * shader::kViewScoreSlotWords;
 constexpr uint32_t kScoreChunk = 1024;  // candidates per submit, at most
+constexpr uint64_t kScoreScratchBytes = 256ull << 20;  // and at most this much scratch (~1 MiB a slot)
 constexpr uint32_t kWorkgroup = 256;
 
 // Workgroup size of the one-workgroup-per-item kernels (view_score, gmsd): a multiple of 8.
@@ -410,7 +411,8 @@ class VulkanEngine final : public Engine {
       images->candidate.resize(pixels * count);
     }
     if (count == 0) return;
-    const uint32_t chunk = uint32_t(std::min<uint64_t>({kScoreChunk, count, max_buffer_ / kScoreSlotBytes}));
+    const uint32_t chunk = uint32_t(
+        std::min<uint64_t>({kScoreChunk, count, std::min(max_buffer_, kScoreScratchBytes) / kScoreSlotBytes}));
     vk::Buffer& cand = buffer(candidates_, sizeof(ViewCandidate) * chunk);
     vk::Buffer& scratch = buffer(scratch_, kScoreSlotBytes * chunk);
     vk::Buffer& results = buffer(results_, 8ull * chunk);  // gmsd, lattice

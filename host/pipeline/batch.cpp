@@ -223,7 +223,7 @@ json options_json(const BatchOptions& o) {
   json j = {{"uvpress", o.version}, {"format", o.format}, {"cost", r.size ? json(nullptr) : json(r.cost)},
             {"size", r.size}, {"max_gmsd", r.max_gmsd}, {"pot", r.power_of_two}, {"gutter", r.gutter}, {"block", r.block},
             {"optimize", r.optimize}, {"epsilon", r.triangle.epsilon}, {"evaluations", r.triangle.evaluations},
-            {"view_size", r.triangle.view_size}, {"seed", r.triangle.seed}, {"eval", o.eval},
+            {"view_size", r.triangle.view_size}, {"seed", r.triangle.seed}, {"early_stop", r.triangle.early_stop}, {"eval", o.eval},
             {"allow_outside_refs", o.refs.allow_outside}};
   if (o.eval) j["eval_options"] = {{"cost_grid", o.eval_options.cost_grid}, {"resolution", o.eval_options.resolution}};
   return j;

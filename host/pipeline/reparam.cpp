@@ -42,6 +42,38 @@ struct Layout {
   std::string untouched;  // why the layout is left as it is ("" when it is re-parameterized)
 };
 
+// What the triangle stage measured over one layout, for the report: how many triangles met
+// eps (the rest are kept at the identity, with the identity's measured loss), whether the
+// views resolved the source texels, and how far the targets shrink (lambda1 lambda2).
+struct TriangleCounts {
+  size_t optimized = 0, feasible = 0, resolved = 0, sampled = 0, coarsened = 0;
+  std::vector<double> infeasible_identity_gmsd, lambda_area;
+
+  static double quantile(std::vector<double> v, double q) {
+    if (v.empty()) return 0;
+    std::sort(v.begin(), v.end());
+    return v[size_t(std::floor(q * double(v.size() - 1) + 0.5))];
+  }
+  json to_json(const perceptual::TriangleStageOptions& t) const {
+    json j = {{"epsilon", t.epsilon},
+              {"evaluations", t.evaluations},
+              {"early_stop", t.early_stop},
+              {"view_size", t.view_size},
+              {"triangles", optimized},
+              {"feasible", feasible},
+              {"infeasible", optimized - feasible},
+              {"views_resolve_texels", resolved},
+              {"sampled_by_patches", sampled},
+              {"tiles_coarsened", coarsened},
+              {"lambda_area_quartiles",
+               {quantile(lambda_area, 0.25), quantile(lambda_area, 0.5), quantile(lambda_area, 0.75)}}};
+    if (!infeasible_identity_gmsd.empty())
+      j["infeasible_identity_gmsd"] = {{"median", quantile(infeasible_identity_gmsd, 0.5)},
+                                       {"max", quantile(infeasible_identity_gmsd, 1.0)}};
+    return j;
+  }
+};
+
 std::vector<Layout> find_layouts(const io::Asset& asset) {
   // Union-find over images (0..I-1) and UV sets (I..).
   std::map<UvSet, int> set_id;
@@ -123,7 +155,7 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
   report["device"] = device.name;
   report["backend"] = device.backend;
 
-  size_t flips = 0, total_charts = 0;
+  size_t flips = 0, total_charts = 0, optimized = 0, infeasible = 0;
   double old_texels = 0, new_texels = 0;
   json textures = json::array(), layout_reports = json::array();
   double t_triangle = 0, t_mesh = 0, t_pack = 0, t_bake = 0;
@@ -154,6 +186,7 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
     std::vector<std::vector<perceptual::TriangleTarget>> chart_targets(L.uv_sets.size());
     double old_used = 0;  // eq. 20: source texels under the input's charts
     size_t layout_flips = 0, rigid = 0;
+    TriangleCounts tri;
     for (size_t si = 0; si < L.uv_sets.size(); ++si) {
       const io::Primitive& prim = asset.primitives[size_t(L.uv_sets[si].primitive)];
       const std::vector<float>& uv = prim.uv_sets[size_t(L.uv_sets[si].tex_coord)].uv;
@@ -176,8 +209,17 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
           topt.progress = [&progress, stage](size_t done, size_t total) { progress(stage, done, total); };
         }
         auto results = perceptual::optimize_triangles(engine, in, luminance, topt);
-        for (size_t t = 0; t < results.size(); ++t)
-          targets[t] = {results[t].rotation, results[t].stretch, results[t].weight_rotation, results[t].weight_stretch};
+        for (size_t t = 0; t < results.size(); ++t) {
+          const auto& r = results[t];
+          targets[t] = {r.rotation, r.stretch, r.weight_rotation, r.weight_stretch};
+          tri.optimized += 1;
+          tri.feasible += r.feasible;
+          if (!r.feasible) tri.infeasible_identity_gmsd.push_back(r.identity_gmsd);
+          tri.resolved += r.texels_per_pixel <= 1.0 + 1e-6;
+          tri.sampled += !r.complete;
+          tri.coarsened += r.identity_lattice > 1;
+          tri.lambda_area.push_back(r.lambda1 * r.lambda2);
+        }
         t_triangle += seconds_since(t0);
       }
       chart_targets[si] = std::move(targets);
@@ -343,6 +385,10 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
     jl["packing_efficiency"] = packing.efficiency;
     jl["chart_cost_ratio"] = choice.cost_ratio;
     jl["flips"] = layout_flips;
+    if (o.optimize) {
+      jl["triangle_stage"] = tri.to_json(o.triangle);
+      infeasible += tri.optimized - tri.feasible, optimized += tri.optimized;
+    }
     layout_reports.push_back(jl);
   }
 
@@ -394,6 +440,8 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
   report["cost_ratio"] = old_texels > 0 ? new_texels / old_texels : 1.0;
   report["flips"] = flips;
   report["charts"] = total_charts;
+  report["triangles_optimized"] = optimized;
+  report["triangles_infeasible"] = infeasible;
   report["stages"] = stages;
   report["warnings"] = warnings;
   report["seconds"] = seconds_since(t_start);

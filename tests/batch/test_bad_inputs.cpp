@@ -173,7 +173,7 @@ TEST_CASE("bad inputs: --allow-outside-refs restores reading a trusted layout's 
   CHECK(entries(dir / "out").empty());
 
   // Opted out: today's behaviour, the shared texture carried byte for byte, a valid asset.
-  for (const std::string& flags : {"--allow-outside-refs copy", "copy --allow-outside-refs"}) {
+  for (const std::string flags : {"--allow-outside-refs copy", "copy --allow-outside-refs"}) {
     auto r = run_uvpress(flags + " " + quoted(asset) + " -o " + quoted(dir / "out" / "crate.glb"));
     INFO(flags << ": " << r.err);
     CHECK(r.exit_code == 0);

@@ -66,8 +66,10 @@ TEST_CASE("Triangle stage: flat signal shrinks, detail keeps its size, every res
     INFO("triangle " << which[k] << " lambda " << r[k].lambda1 << " " << r[k].lambda2 << " gmsd " << r[k].gmsd
                      << " evals " << r[k].evaluations << " wR " << r[k].weight_rotation << " wS "
                      << r[k].weight_stretch);
+    CHECK(r[k].feasible);
     CHECK(r[k].gmsd < o.epsilon);
-    CHECK(r[k].evaluations <= o.evaluations);
+    CHECK(r[k].identity_gmsd < 1e-3);         // the views are faithful: J = I reproduces them
+    CHECK(r[k].evaluations == o.evaluations);  // the documented budget, no early stop by default
     double det = r[k].jacobian[0] * r[k].jacobian[3] - r[k].jacobian[1] * r[k].jacobian[2];
     CHECK(det == Approx(r[k].lambda1 * r[k].lambda2).epsilon(1e-9));
     if (k < 4) {
@@ -101,5 +103,41 @@ TEST_CASE("Triangle stage is deterministic whatever the thread count and overlap
     CHECK(a[k].gmsd == b[k].gmsd);
     CHECK(a[k].evaluations == b[k].evaluations);
     CHECK(a[k].weight_rotation == b[k].weight_rotation);
+  }
+}
+
+TEST_CASE("Triangle stage: a triangle with no feasible point is returned at the identity with its measured loss", "[perceptual][bo]") {
+  Synthetic s = synthetic();
+  auto engine = engine::make_cpu_engine({});
+  perceptual::TriangleStageOptions o;
+  o.evaluations = 20;
+  std::vector<uint32_t> which = detailed();
+  for (uint32_t t : flat()) which.push_back(t);
+  // eps = 0: no loss is below it, not even the identity's.
+  o.epsilon = 0;
+  auto r = perceptual::optimize_triangles(*engine, s.input(), s.texture, o, which);
+  REQUIRE(r.size() == which.size());
+  for (const auto& t : r) {
+    CHECK(!t.feasible);
+    CHECK(t.lambda1 == 1);
+    CHECK(t.lambda2 == 1);
+    CHECK(t.jacobian == std::array<double, 4>{1, 0, 0, 1});
+    CHECK(t.gmsd == t.identity_gmsd);  // the loss measured at the returned J, not a default 0
+    CHECK(std::isinf(t.objective));
+  }
+  // A tight eps on detail: either a point near the identity meets it, or the triangle is
+  // reported infeasible at the identity; never a shrunk J that does not meet eps.
+  o.epsilon = 2e-4;
+  o.evaluations = 30;
+  auto d = perceptual::optimize_triangles(*engine, s.input(), s.texture, o, detailed());
+  for (const auto& t : d) {
+    INFO("lambda " << t.lambda1 << " " << t.lambda2 << " gmsd " << t.gmsd << " identity " << t.identity_gmsd);
+    if (t.feasible) {
+      CHECK(t.gmsd < o.epsilon);
+      CHECK(t.lambda1 * t.lambda2 > 0.8);
+    } else {
+      CHECK(t.jacobian == std::array<double, 4>{1, 0, 0, 1});
+      CHECK(t.gmsd == t.identity_gmsd);
+    }
   }
 }

@@ -88,6 +88,7 @@ void add_batch(CLI::App& app, Globals& g) {
   cmd->add_option("--epsilon", o.reparam.triangle.epsilon, "GMSD bound per triangle view (eq. 12)")->capture_default_str()->check(CLI::Range(1e-4, 0.5));
   cmd->add_option("--evaluations", o.reparam.triangle.evaluations, "GP-BO evaluations per triangle")->capture_default_str()->check(CLI::Range(11, 1000));
   cmd->add_option("--view-size", o.reparam.triangle.view_size, "Per-triangle view size in pixels")->capture_default_str()->check(CLI::IsMember({16u, 32u, 48u, 64u}));
+  cmd->add_flag("--early-stop", o.reparam.triangle.early_stop, "Stop a triangle's search once it stalls");
   cmd->add_option("--seed", o.reparam.triangle.seed, "Seed of the Bayesian optimization")->capture_default_str();
   cmd->add_flag("--no-optimize", a->no_optimize, "Keep every triangle's shape: only repack and re-bake");
   cmd->add_flag("--eval", o.eval, "Also evaluate each result against its input (NAME.eval.json)");

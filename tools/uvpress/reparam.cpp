@@ -77,6 +77,7 @@ void add_reparam(CLI::App& app, Globals& g) {
   cmd->add_option("--evaluations", o->triangle.evaluations, "GP-BO evaluations per triangle")->capture_default_str()->check(CLI::Range(11, 1000));
   cmd->add_option("--view-size", o->triangle.view_size, "Per-triangle view size in pixels")->capture_default_str()->check(CLI::IsMember({16u, 32u, 48u, 64u}));
   cmd->add_option("--seed", o->triangle.seed, "Seed of the Bayesian optimization")->capture_default_str();
+  cmd->add_flag("--early-stop", o->triangle.early_stop, "Stop a triangle's search once it stalls (30+ evaluations, 25 without gain)");
   cmd->add_flag("--no-optimize", *no_optimize, "Keep every triangle's shape: only repack and re-bake");
   cmd->callback([&g, input, output, o, no_optimize] {
     g.action = [&g, input, output, o, no_optimize] {
@@ -94,9 +95,14 @@ void add_reparam(CLI::App& app, Globals& g) {
       uint64_t in_bytes = std::filesystem::file_size(*input), out_bytes = std::filesystem::file_size(*output);
       for (const auto& w : report["warnings"]) std::fprintf(stderr, "uvpress: %s: warning: %s\n", input->c_str(), w.get<std::string>().c_str());
       const uint64_t old_t = texels(report["textures"], "old_size"), new_t = texels(report["textures"], "new_size");
-      std::printf("%s (%s, %llu texels) -> %s (%s, %llu texels), cost ratio %.3f, %.1f s\n", input->c_str(),
+      // Triangles whose search never met eps keep their shape: say so on the summary line.
+      std::string infeasible;
+      if (const size_t n = report["triangles_infeasible"].get<size_t>())
+        infeasible = ", " + std::to_string(n) + " of " + std::to_string(report["triangles_optimized"].get<size_t>()) +
+                     " triangles infeasible at epsilon (kept at the identity)";
+      std::printf("%s (%s, %llu texels) -> %s (%s, %llu texels), cost ratio %.3f%s, %.1f s\n", input->c_str(),
                   human_bytes(in_bytes).c_str(), (unsigned long long)old_t, output->c_str(), human_bytes(out_bytes).c_str(),
-                  (unsigned long long)new_t, report["cost_ratio"].get<double>(), seconds);
+                  (unsigned long long)new_t, report["cost_ratio"].get<double>(), infeasible.c_str(), seconds);
       if (g.verbose)
         for (auto& [stage, s] : report["stages"].items()) std::fprintf(stderr, "%s: %.2f s\n", stage.c_str(), s.get<double>());
       nlohmann::ordered_json out = {{"input", *input}, {"output", *output}, {"device", report["device"]},
