@@ -4,6 +4,7 @@
 #include "atlas/pack.h"
 #include "atlas/rebake.h"
 #include "core/error.h"
+#include "core/quantile.h"
 #include "eval/eval.h"
 #include "io/asset.h"
 #include "io/gltf_append.h"
@@ -49,11 +50,6 @@ struct TriangleCounts {
   size_t optimized = 0, feasible = 0, resolved = 0, sampled = 0, coarsened = 0;
   std::vector<double> infeasible_identity_gmsd, lambda_area;
 
-  static double quantile(std::vector<double> v, double q) {
-    if (v.empty()) return 0;
-    std::sort(v.begin(), v.end());
-    return v[size_t(std::floor(q * double(v.size() - 1) + 0.5))];
-  }
   json to_json(const perceptual::TriangleStageOptions& t) const {
     json j = {{"epsilon", t.epsilon},
               {"evaluations", t.evaluations},

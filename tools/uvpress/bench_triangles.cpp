@@ -4,6 +4,7 @@
 #include "bench.h"
 
 #include "core/error.h"
+#include "core/quantile.h"
 #include "io/asset.h"
 #include "io/image_io.h"
 #include "perceptual/triangle_stage.h"
@@ -53,12 +54,6 @@ AssetWork load_asset(const std::string& spec) {
     }
   if (a.parts.empty()) throw InputError(spec, "no primitive samples a baseColor texture");
   return a;
-}
-
-double quantile(std::vector<double> v, double q) {
-  if (v.empty()) return 0;
-  std::sort(v.begin(), v.end());
-  return v[size_t(std::min<double>(double(v.size() - 1), std::floor(q * double(v.size() - 1) + 0.5)))];
 }
 
 void bench_triangles(const Globals& g, const std::vector<std::string>& specs, uint32_t limit, int evaluations,
