@@ -246,7 +246,8 @@ std::vector<float> isometric_uvs(const LayoutMesh& ref, double* aspect, nlohmann
       flatten::Options o;
       o.max_iterations = 300;
       auto r = flatten::flatten(chart, o);
-      if (r.flips) throw flatten::FlattenError("flips");
+      // A failed solve, flips or non-finite UVs: fall back to the input UVs like a non-disk.
+      if (const std::string why = flatten::invalid_reason(r); !why.empty()) throw flatten::FlattenError(why);
       cuv = r.uv;
       ++flattened;
     } catch (const flatten::FlattenError&) {

@@ -22,6 +22,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 
 namespace uvpress::flatten {
 
@@ -40,6 +41,32 @@ std::optional<Method> parse_method(const std::string& name) {
   for (Method m : all_methods())
     if (name == to_string(m)) return m;
   return std::nullopt;
+}
+
+const char* to_string(StopReason r) {
+  switch (r) {
+    case StopReason::RelativeChange: return "relative change";
+    case StopReason::GradientNorm: return "gradient norm";
+    case StopReason::StalledAtFloor: return "stalled at floor";
+    case StopReason::MaxIterations: return "max iterations";
+    case StopReason::LineSearchFailed: return "line search failed";
+    case StopReason::FactorizationFailed: return "factorization failed";
+  }
+  return "?";
+}
+
+bool is_convergence(StopReason r) {
+  return r == StopReason::RelativeChange || r == StopReason::GradientNorm || r == StopReason::StalledAtFloor;
+}
+
+bool is_failure(StopReason r) { return r == StopReason::LineSearchFailed || r == StopReason::FactorizationFailed; }
+
+std::string invalid_reason(const Result& r) {
+  if (r.failed()) return r.failure.empty() ? to_string(r.stop) : r.failure;
+  if (r.flips) return std::to_string(r.flips) + " flipped triangles in the UVs";
+  for (double x : r.uv)
+    if (!std::isfinite(x)) return "non-finite UVs";
+  return "";
 }
 
 std::vector<Method> all_methods() { return {Method::Progressive, Method::Slim, Method::Cm, Method::PCm, Method::Hybrid}; }
@@ -112,6 +139,7 @@ Result flatten(const Mesh& mesh, const Options& o) {
   const std::vector<double> area_w = area_weights(p);
   const std::vector<double> uniform_w(nt, 1.0 / double(nt));
   Solver solver(p);
+  solver.break_factorization(o.test_break_factorization);
 
   Result r;
   r.degenerate_references = p.degenerate;
@@ -126,7 +154,7 @@ Result flatten(const Mesh& mesh, const Options& o) {
   bool slim = o.method == Method::Slim || o.method == Method::Progressive || o.method == Method::Hybrid;
   double e_n = 1000;
   std::vector<double> ref;
-  r.stop_reason = "max iterations";
+  r.stop = StopReason::MaxIterations;
   for (int it = 1; it <= o.max_iterations; ++it) {
     auto clock = Clock::now();
     double t_com = 1;
@@ -142,7 +170,12 @@ Result flatten(const Mesh& mesh, const Options& o) {
     StepStats s = solver.step(uv, in_progressive ? ref : p.ideal, in_progressive ? uniform_w : area_w,
                               slim ? Proxy::Slim : Proxy::Cm, in_progressive ? 0.0 : o.gradient_tolerance);
     if (s.below_gradient_tolerance) {
-      r.converged = true, r.stop_reason = "gradient norm";
+      r.stop = StopReason::GradientNorm;
+      break;
+    }
+    if (s.factorization_failed) {  // a solver failure in either phase: nothing to fall back on
+      r.stop = StopReason::FactorizationFailed;
+      r.failure = s.failure;
       break;
     }
     if (s.line_search_failed) {
@@ -151,8 +184,15 @@ Result flatten(const Mesh& mesh, const Options& o) {
         --it;
         continue;
       }
-      // No decrease along a descent direction: the energy is at its floating-point floor.
-      r.converged = true, r.stop_reason = "line search";
+      if (s.no_decrease) {  // a descent direction that gives no decrease: E is at its floor
+        r.stop = StopReason::StalledAtFloor;
+      } else {
+        r.stop = StopReason::LineSearchFailed;
+        char detail[160];
+        std::snprintf(detail, sizeof detail, "line search failed: no descent direction (gradient norm %.3g, maximal step %.3g)",
+                      s.gradient_norm, s.max_step);
+        r.failure = detail;
+      }
       break;
     }
     auto t_analyze = Clock::now();
@@ -180,10 +220,12 @@ Result flatten(const Mesh& mesh, const Options& o) {
     r.iterations = it;
     if (o.on_iteration) o.on_iteration(rec);
     if (!in_progressive && e_n < o.relative_tolerance) {
-      r.converged = true, r.stop_reason = "relative change";
+      r.stop = StopReason::RelativeChange;
       break;
     }
   }
+  r.converged = is_convergence(r.stop);
+  r.stop_reason = to_string(r.stop);
   r.seconds = std::chrono::duration<double>(Clock::now() - iterations_start).count();
   r.energy = a.energy;
   r.max_distortion = a.max_distortion;

@@ -32,6 +32,27 @@ class FlattenError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// Why the iterations ended. The first three are convergence (Result::converged), the last
+// two failure (Result::failed(): the UVs are not the method's result - the last accepted
+// iterate, flip-free, but nothing to ship); MaxIterations is neither: the budget ran out on
+// a valid map that had not converged.
+enum class StopReason {
+  RelativeChange,   // e_n < relative_tolerance in the final phase (problem (5))
+  GradientNorm,     // |grad E| < gradient_tolerance in the final phase
+  StalledAtFloor,   // final phase: no step along a descent direction lowers E any more
+                    // (Armijo, 60 halvings): E is at its floating-point floor
+  MaxIterations,    // max_iterations linear solves
+  LineSearchFailed, // the step gave no descent direction (grad . d not < 0 or not finite)
+                    // or no room to move (maximal non-inverting step 0)
+  FactorizationFailed,  // CHOLMOD could not factorize the system (not positive definite,
+                        // non-finite entries, out of memory); Result::failure says which
+};
+// "relative change", "gradient norm", "stalled at floor", "max iterations",
+// "line search failed", "factorization failed".
+const char* to_string(StopReason r);
+bool is_convergence(StopReason r);  // RelativeChange, GradientNorm, StalledAtFloor
+bool is_failure(StopReason r);      // LineSearchFailed, FactorizationFailed
+
 // One iteration (= one linear solve) of the solver.
 struct IterationRecord {
   int iteration = 0;           // 1-based
@@ -58,6 +79,9 @@ struct Options {
   double gradient_tolerance = 1e-6;  // ... or the gradient norm is below this
   double eta_epsilon = 0.01;         // eq. (12)
   std::function<void(const IterationRecord&)> on_iteration;  // called after every iteration
+  // Test hook: the n-th numeric factorization (1-based; 0 = none) sees the system negated,
+  // so CHOLMOD fails on it as on a matrix that is not positive definite.
+  int test_break_factorization = 0;
 };
 
 struct Result {
@@ -65,8 +89,12 @@ struct Result {
   // Vertices no triangle uses get (0, 0).
   std::vector<double> uv;
   int iterations = 0;           // N_c: linear solves
-  bool converged = false;
-  std::string stop_reason;      // "relative change", "gradient norm", "max iterations", "line search"
+  StopReason stop = StopReason::MaxIterations;
+  bool converged = false;       // is_convergence(stop)
+  std::string stop_reason;      // to_string(stop): what the reports carry ("stop")
+  std::string failure;          // when failed(): the reason in words, e.g. "factorization failed:
+                                // matrix not positive definite (CHOLMOD)"; "" otherwise
+  bool failed() const { return is_failure(stop); }
   int eta = 0;                  // eq. (12)
   double initial_energy = 0;    // E/|M| of the Tutte embedding
   double energy = 0;            // E_c = E(M, M^p_c) / |M|
@@ -80,6 +108,11 @@ struct Result {
 
 // Throws FlattenError when the mesh is not a single disk (see disk_topology.h).
 Result flatten(const Mesh& mesh, const Options& options = {});
+
+// Why `r` is not a valid map to write, in one phrase for an error line ("" when it is one):
+// a failed solve (r.failure), flipped triangles (r.flips), or non-finite UVs. A stall at
+// the floor or the iteration limit on a flip-free, finite map is a valid map.
+std::string invalid_reason(const Result& r);
 
 // Triangles whose UV image has non-positive signed area (counter-clockwise = positive).
 size_t count_flips(const std::vector<uint32_t>& triangles, const std::vector<double>& uv);

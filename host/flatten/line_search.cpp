@@ -56,7 +56,9 @@ LineSearchResult armijo(std::vector<double>& uv, const std::vector<double>& d, d
   for (int k = 0; k < 60 && a > 0; ++k, a *= 0.5) {
     for (size_t i = 0; i < uv.size(); ++i) trial[i] = uv[i] + a * d[i];
     const double e = energy(trial);
-    if (std::isfinite(e) && e <= e0 + c * a * slope) {
+    // e < e0 too: at the floating-point floor e0 + c a slope rounds to e0, and a step that
+    // lowers nothing is no step (the caller then reports a stall, not a fake decrease).
+    if (std::isfinite(e) && e < e0 && e <= e0 + c * a * slope) {
       uv.swap(trial);
       return {a, e};
     }

@@ -16,7 +16,7 @@ double max_injective_step(const std::vector<uint32_t>& triangles, const std::vec
                           const std::vector<double>& d);
 
 struct LineSearchResult {
-  double step = 0;     // 0 when no step decreased the energy enough
+  double step = 0;     // 0 when no step decreased the energy enough (strictly, and by Armijo's c a slope)
   double energy = 0;   // objective at the accepted point (the old one when step = 0)
 };
 

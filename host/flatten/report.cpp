@@ -21,6 +21,7 @@ nlohmann::ordered_json summary_json(const Result& r, Method method, size_t faces
   j["peak_rss_mb"] = peak_rss_mb();
   j["converged"] = r.converged;
   j["stop"] = r.stop_reason;
+  if (!r.failure.empty()) j["failure"] = r.failure;
   j["E_init"] = r.initial_energy;
   j["max_distortion"] = r.max_distortion;
   j["init_s"] = r.init_seconds;

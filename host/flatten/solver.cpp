@@ -4,6 +4,7 @@
 #include "flatten/line_search.h"
 #include "flatten/slim.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 
@@ -92,7 +93,8 @@ StepStats Solver::step(std::vector<double>& uv, const std::vector<double>& ref, 
 
   if (!system_.factorize()) {
     s.t_factorization = since(clock);
-    s.line_search_failed = true;
+    s.line_search_failed = s.factorization_failed = true;
+    s.failure = system_.failure().c_str();
     s.energy_after = s.energy_before;
     return s;
   }
@@ -103,18 +105,18 @@ StepStats Solver::step(std::vector<double>& uv, const std::vector<double>& ref, 
   double slope = 0;
   for (size_t i = 0; i < dir_.size(); ++i) slope += grad_[i] * dir_[i];
   s.max_step = max_injective_step(p_.triangles, uv, dir_);
-  if (!(slope < 0)) {  // not a descent direction (cannot happen with an SPD proxy)
-    s.line_search_failed = true;
+  const double a0 = std::min(1.0, 0.9 * s.max_step);
+  if (!(slope < 0) || !(a0 > 0)) {  // no descent direction (cannot happen with an SPD proxy and finite data)
+    s.line_search_failed = s.not_descent = true;
     s.energy_after = s.energy_before;
     s.t_line_search = since(clock);
     return s;
   }
-  const double a0 = std::min(1.0, 0.9 * s.max_step);
   auto ls = armijo(uv, dir_, s.energy_before, slope, a0,
                    [&](const std::vector<double>& x) { return energy(x, ref, w); });
   s.step = ls.step;
   s.energy_after = ls.energy;
-  s.line_search_failed = ls.step == 0;
+  s.line_search_failed = s.no_decrease = ls.step == 0;
   s.t_line_search = since(clock);
   return s;
 }

@@ -20,7 +20,13 @@ struct StepStats {
   double gradient_norm = 0;
   double step = 0, max_step = 0;
   bool below_gradient_tolerance = false;  // no step taken
-  bool line_search_failed = false;        // direction gave no Armijo decrease
+  bool line_search_failed = false;        // no step taken: any of the three below
+  bool no_decrease = false;     // a descent direction along which no step lowered the objective (60
+                                // halvings from a0 > 0): the floating-point floor
+  bool not_descent = false;     // the solve gave no descent direction (grad . d not < 0, NaN) or no
+                                // room to move (maximal step 0)
+  bool factorization_failed = false;  // the linear system could not be factorized (see failure)
+  const char* failure = "";     // SparseSystem::failure() when factorization_failed
   double t_gradient = 0, t_assembly = 0, t_factorization = 0, t_solve = 0, t_line_search = 0;
 };
 
@@ -38,6 +44,8 @@ class Solver {
                  double gradient_tolerance);
 
   size_t nonzeros() const { return system_.nonzeros(); }
+  // Test hook: see SparseSystem::break_factorization.
+  void break_factorization(int n) { system_.break_factorization(n); }
 
  private:
   const Problem& p_;

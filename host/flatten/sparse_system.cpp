@@ -3,6 +3,8 @@
 #include "flatten/symmetric_dirichlet.h"
 
 #include <algorithm>
+#include <cmath>
+#include <string>
 #include <cstdlib>
 #include <dlfcn.h>
 #include <mutex>
@@ -90,6 +92,7 @@ SparseSystem::SparseSystem(size_t nv, const std::vector<uint32_t>& tris) : n_(2 
     for (size_t c = 0; c < tris.size(); ++c) vertex_corner_[fill[tris[c]]++] = uint32_t(c);
   }
 
+  solver_.cholmod().print = 0;  // no warnings on stdout: a failure is reported by failure()
   solver_.analyzePattern(matrix_);
 }
 
@@ -128,9 +131,25 @@ void SparseSystem::gather_gradient(const std::vector<double>& grad6, std::vector
 }
 
 bool SparseSystem::factorize() {
+  failure_.clear();
+  double* values = matrix_.valuePtr();
+  const long nnz = long(matrix_.nonZeros());
+  if (++factorizations_ == break_at_)
+    for (long k = 0; k < nnz; ++k) values[k] = -values[k];
+  long bad = 0;
+  for (long k = 0; k < nnz; ++k) bad += !std::isfinite(values[k]);
+  if (bad) {
+    failure_ = "factorization failed: " + std::to_string(bad) + " non-finite matrix entries";
+    return false;
+  }
   solver_.setShift(1e-10 * diagonal_mean_);
   solver_.factorize(matrix_);
-  return solver_.info() == Eigen::Success;
+  if (solver_.info() == Eigen::Success) return true;
+  const int status = solver_.cholmod().status;
+  failure_ = status == CHOLMOD_NOT_POSDEF ? "factorization failed: matrix not positive definite (CHOLMOD)"
+             : status == CHOLMOD_OUT_OF_MEMORY ? "factorization failed: out of memory (CHOLMOD)"
+                                               : "factorization failed (CHOLMOD status " + std::to_string(status) + ")";
+  return false;
 }
 
 void SparseSystem::solve(const std::vector<double>& grad, std::vector<double>& d) {

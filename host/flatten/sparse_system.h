@@ -23,6 +23,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <string>
 #include <vector>
 
 namespace uvpress::flatten {
@@ -36,8 +37,16 @@ class SparseSystem {
   void assemble(const std::vector<double>& hess21);
   // grad6[6 t + k] -> grad (2V), fixed order.
   void gather_gradient(const std::vector<double>& grad6, std::vector<double>& grad) const;
-  // Numeric factorization of the assembled matrix. Returns false when CHOLMOD fails.
+  // Numeric factorization of the assembled matrix. Returns false when it fails: an entry
+  // that is not finite (CHOLMOD is not called: what it does with NaN depends on the BLAS),
+  // or CHOLMOD finds the matrix not positive definite or runs out of memory. failure() then
+  // says which, in words ("" after a success).
   bool factorize();
+  const std::string& failure() const { return failure_; }
+  // Test hook: the n-th call of factorize() (1-based; 0, the default, never) negates the
+  // assembled matrix first, so that CHOLMOD itself meets a matrix that is not positive
+  // definite - a deterministic stand-in for the numerical breakdowns real inputs cause.
+  void break_factorization(int n) { break_at_ = n; }
   // Solves H d = -grad with vertex 0 pinned.
   void solve(const std::vector<double>& grad, std::vector<double>& d);
 
@@ -51,6 +60,8 @@ class SparseSystem {
   std::vector<uint32_t> pinned_entries_;  // nonzeros in the rows/columns of dofs 0 and 1
   Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Lower> solver_;
   double diagonal_mean_ = 1;
+  std::string failure_;
+  int factorizations_ = 0, break_at_ = 0;
 };
 
 // Determinism: OpenBLAS splits the supernodal kernels differently for different thread

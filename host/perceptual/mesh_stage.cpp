@@ -173,6 +173,7 @@ class MeshStage {
  public:
   MeshStage(const Geometry& g, const Targets& tg, const MeshStageOptions& o)
       : g_(g), tg_(tg), o_(o), system_(g.vertex_count, g.tris) {
+    system_.break_factorization(o.test_break_factorization);
     const size_t n = g.size();
     k_.assign(n, 0);
     R_.assign(4 * n, 0);
@@ -262,6 +263,7 @@ class MeshStage {
       base_ready_ = true;
       ++res.factorizations;
       res.t_factorization += lap(clock);
+      if (!base_ok_) fail(res, "fit matrix: " + system_.failure());
     }
     if (!base_ok_) return;  // no step: the input stays (flip-free)
     grad6_.resize(6 * size_t(n));
@@ -289,7 +291,11 @@ class MeshStage {
       } else if (active <= kFewActive) {
         res.cg_iterations += pcg();
       } else {  // many barriers: factorize the full Hessian (a second system; the base stays)
-        if (!full_) full_ = std::make_unique<flatten::SparseSystem>(g_.vertex_count, g_.tris);
+        if (!full_) {
+          full_ = std::make_unique<flatten::SparseSystem>(g_.vertex_count, g_.tris);
+          // The hook counts factorizations over both systems; the base has used one.
+          if (o_.test_break_factorization > 1) full_->break_factorization(o_.test_break_factorization - res.factorizations);
+        }
         hess21_.resize(21 * size_t(n));
 #pragma omp parallel for schedule(static) if (worth_threads(n))
         for (long a = 0; a < n; ++a)
@@ -301,7 +307,10 @@ class MeshStage {
         ++res.factorizations;
         const bool ok = full_->factorize();
         res.t_factorization += lap(clock);
-        if (!ok) break;
+        if (!ok) {
+          fail(res, "full Hessian (" + std::to_string(active) + " active barriers): " + full_->failure());
+          break;
+        }
         full_->solve(grad_, dir_);
       }
       res.t_solve += lap(clock);
@@ -328,6 +337,7 @@ class MeshStage {
   }
 
   double w_b() const { return w_b_; }
+  bool base_failed() const { return base_ready_ && !base_ok_; }
   const std::vector<int>& k() const { return k_; }
 
  private:
@@ -392,6 +402,13 @@ class MeshStage {
     return it;
   }
 
+  // The first failure is the one reported.
+  static void fail(MeshStageResult& res, const std::string& why) {
+    if (res.failed()) return;
+    res.status = MeshStageStatus::FactorizationFailed;
+    res.failure = why;
+  }
+
   static void rotated_target(const double* Rb, int k, double* Rt) {
     static const double quarter[4][4] = {{1, 0, 0, 1}, {0, -1, 1, 0}, {-1, 0, 0, -1}, {0, 1, -1, 0}};
     mul(Rb, quarter[k], Rt);
@@ -418,6 +435,15 @@ class MeshStage {
 };
 
 }  // namespace
+
+const char* to_string(MeshStageStatus s) {
+  switch (s) {
+    case MeshStageStatus::Optimized: return "optimized";
+    case MeshStageStatus::NoActiveTriangles: return "no active triangles";
+    case MeshStageStatus::FactorizationFailed: return "factorization failed";
+  }
+  return "?";
+}
 
 namespace detail {
 
@@ -472,7 +498,10 @@ MeshStageResult fit_chart(const std::vector<double>& uv, const std::vector<uint3
   res.jacobian.assign(4 * nt, 0.0);
   const Geometry g = make_geometry(uv, triangles);
   res.passive = nt - g.size();
-  if (g.size() == 0) return res;
+  if (g.size() == 0) {
+    res.status = MeshStageStatus::NoActiveTriangles;
+    return res;
+  }
 
   // Targets of the active triangles: R-bar orthonormalized, S-bar symmetrized, weights floored.
   Targets tg;
@@ -504,6 +533,10 @@ MeshStageResult fit_chart(const std::vector<double>& uv, const std::vector<uint3
   res.energy_history.push_back(e19);
   for (int it = 1; it <= o.max_iterations; ++it) {
     stage.global_step(x, res);
+    if (stage.base_failed()) {  // no global step is possible: the input stays, untouched
+      x = uv;
+      break;
+    }
     auto clock = Clock::now();
     stage.local_step(x, true);
     res.t_local += lap(clock);

@@ -48,6 +48,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 namespace uvpress::perceptual {
@@ -57,6 +58,17 @@ struct TriangleTarget {
   std::array<double, 4> stretch{1, 0, 0, 1};   // S-bar, symmetric, row-major
   double weight_rotation = 1, weight_stretch = 1;  // w_R, w_S (eq. 17)
 };
+
+// How fit_chart ended for a chart.
+enum class MeshStageStatus {
+  Optimized,            // local-global ran; `uv` is its result (flip-free)
+  NoActiveTriangles,    // every triangle is passive: nothing to fit, `uv` = the input
+  FactorizationFailed,  // a sparse factorization failed (see MeshStageResult::failure).
+                        // The fit term's matrix, at the start: `uv` = the input, untouched.
+                        // A full-Hessian refactorization later (many active barriers): `uv` =
+                        // the last accepted iterate, flip-free but not converged.
+};
+const char* to_string(MeshStageStatus s);  // "optimized", "no active triangles", "factorization failed"
 
 struct MeshStageOptions {
   double w_rs = 1e-5;              // eq. 19
@@ -69,10 +81,17 @@ struct MeshStageOptions {
   double barrier_shrink = 20;      // eq. 28
   double weight_floor = 0;                // absolute floor on w_R, w_S
   double weight_floor_relative = 1e-3;    // floor relative to the chart's mean weight
+  // Test hook: the n-th numeric factorization of the chart (1-based, 1 = the fit term's
+  // matrix; 0 = none) sees its matrix negated, so CHOLMOD fails on it.
+  int test_break_factorization = 0;
 };
 
 struct MeshStageResult {
   std::vector<double> uv;       // 2 per vertex, texel units
+  MeshStageStatus status = MeshStageStatus::Optimized;
+  std::string failure;          // status FactorizationFailed: which matrix and why, e.g. "fit matrix:
+                                // factorization failed: matrix not positive definite (CHOLMOD)"; else ""
+  bool failed() const { return status == MeshStageStatus::FactorizationFailed; }
   int iterations = 0;           // local-global iterations done
   int newton_steps = 0;         // linear solves in all global steps
   int factorizations = 0;       // numeric factorizations (1: the fit term's matrix, reused)
@@ -92,7 +111,8 @@ struct MeshStageResult {
 
 // One chart: `uv` = input UVs in texel units (2 per vertex), `triangles` 3 per triangle (CCW
 // in UV), one target per triangle. Throws std::invalid_argument on mismatched sizes or
-// options out of range.
+// options out of range. A solver failure does not throw: it is the result's status (a
+// caller that wants the chart's input layout on failure checks result.failed()).
 MeshStageResult fit_chart(const std::vector<double>& uv, const std::vector<uint32_t>& triangles,
                           const std::vector<TriangleTarget>& targets, const MeshStageOptions& options = {});
 

@@ -9,6 +9,7 @@
 #include "flatten/progressive.h"
 #include "flatten/slim.h"
 #include "flatten/solver.h"
+#include "flatten/sparse_system.h"
 #include "flatten/symmetric_dirichlet.h"
 #include "flatten/tutte.h"
 #include "io/mesh_io.h"
@@ -357,4 +358,104 @@ TEST_CASE("flatten: camelhead - progressive reaches eta in fewer iterations than
   CHECK(cm.flips == 0);
   CHECK(slim.flips == 0);
   CHECK(std::abs(progressive.energy - cm.energy) <= 1e-3 * cm.energy);
+}
+
+TEST_CASE("flatten: stop reasons - convergence, floor stall and failures are told apart", "[flatten]") {
+  for (StopReason s : {StopReason::RelativeChange, StopReason::GradientNorm, StopReason::StalledAtFloor}) {
+    CHECK(is_convergence(s));
+    CHECK_FALSE(is_failure(s));
+  }
+  for (StopReason s : {StopReason::LineSearchFailed, StopReason::FactorizationFailed}) {
+    CHECK(is_failure(s));
+    CHECK_FALSE(is_convergence(s));
+  }
+  CHECK_FALSE(is_convergence(StopReason::MaxIterations));
+  CHECK_FALSE(is_failure(StopReason::MaxIterations));
+  CHECK(std::string(to_string(StopReason::StalledAtFloor)) == "stalled at floor");
+  CHECK(std::string(to_string(StopReason::FactorizationFailed)) == "factorization failed");
+}
+
+TEST_CASE("flatten: a normal mesh converges for a legitimate reason, a valid map", "[flatten]") {
+  Mesh m = grid_disk(16, bump);
+  for (Method method : all_methods()) {
+    Options o;
+    o.method = method;
+    Result r = flatten::flatten(m, o);
+    INFO(to_string(method) << ": stop " << r.stop_reason << ", " << r.failure);
+    CHECK(r.converged);
+    CHECK(is_convergence(r.stop));
+    CHECK_FALSE(r.failed());
+    CHECK(r.stop_reason == to_string(r.stop));
+    CHECK(r.failure.empty());
+    CHECK(invalid_reason(r).empty());
+  }
+}
+
+TEST_CASE("flatten: with the stop tolerances off, CM ends stalled at the floating-point floor", "[flatten]") {
+  Mesh m = grid_disk(8, bump);
+  Options o;
+  o.method = Method::Cm;
+  o.relative_tolerance = 0, o.gradient_tolerance = 0;  // only the floor (or the budget) can end it
+  o.max_iterations = 2000;
+  Result r = flatten::flatten(m, o);
+  INFO(r.iterations << " iterations, stop " << r.stop_reason);
+  CHECK(r.stop == StopReason::StalledAtFloor);
+  CHECK(r.stop_reason == "stalled at floor");
+  CHECK(r.converged);
+  CHECK(r.iterations < o.max_iterations);
+  CHECK(r.flips == 0);
+  CHECK(invalid_reason(r).empty());
+}
+
+TEST_CASE("flatten: a failed factorization is a failure, not convergence", "[flatten]") {
+  Mesh m = grid_disk(16, bump);
+  for (Method method : {Method::Progressive, Method::Slim, Method::Cm}) {
+    for (int n : {1, 4}) {  // at the first solve, and mid-run
+      Options o;
+      o.method = method;
+      o.test_break_factorization = n;
+      Result r = flatten::flatten(m, o);
+      INFO(to_string(method) << ", factorization " << n << " broken: stop " << r.stop_reason << ", " << r.failure);
+      CHECK(r.stop == StopReason::FactorizationFailed);
+      CHECK(r.stop_reason == "factorization failed");
+      CHECK_FALSE(r.converged);
+      CHECK(r.failed());
+      CHECK(r.iterations < n);  // only the solves that succeeded are counted
+      // CHOLMOD itself said no (the hook only negates the matrix).
+      CHECK_THAT(r.failure, Catch::Contains("not positive definite") && Catch::Contains("CHOLMOD"));
+      CHECK(invalid_reason(r) == r.failure);
+      CHECK(r.flips == 0);  // the last accepted iterate is kept, flip-free, but not shipped
+    }
+  }
+}
+
+TEST_CASE("flatten: the sparse system refuses non-finite entries and reports CHOLMOD's failures", "[flatten]") {
+  // One triangle, two vertices free (vertex 0 pinned): the SLIM proxy at the identity is SPD.
+  const std::vector<uint32_t> tris{0, 1, 2};
+  const double Rinv[4] = {1, 0, 0, 1};
+  const double K[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
+  std::vector<double> h21(21);
+  local_hessian(Rinv, K, 1.0, h21.data());
+  SparseSystem good(3, tris);
+  good.assemble(h21);
+  CHECK(good.factorize());
+  CHECK(good.failure().empty());
+
+  SparseSystem broken(3, tris);
+  broken.break_factorization(2);
+  broken.assemble(h21);
+  CHECK(broken.factorize());  // the first call is untouched
+  broken.assemble(h21);
+  CHECK_FALSE(broken.factorize());
+  CHECK_THAT(broken.failure(), Catch::Contains("not positive definite"));
+  broken.assemble(h21);
+  CHECK(broken.factorize());  // only the n-th call
+  CHECK(broken.failure().empty());
+
+  std::vector<double> nan21 = h21;
+  nan21[5] = std::numeric_limits<double>::quiet_NaN();
+  SparseSystem poisoned(3, tris);
+  poisoned.assemble(nan21);
+  CHECK_FALSE(poisoned.factorize());
+  CHECK_THAT(poisoned.failure(), Catch::Contains("non-finite"));
 }

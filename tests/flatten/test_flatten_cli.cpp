@@ -130,6 +130,35 @@ TEST_CASE("flatten CLI: non-disk, empty, NaN and unsupported inputs exit 1 with 
   CHECK(run_uvpress("flatten " + quoted(dir / "holes.obj") + " -o " + quoted(out) + " --method newton").exit_code == 2);
 }
 
+TEST_CASE("flatten CLI: a failed factorization exits 1 with the reason and writes nothing", "[flatten][cli]") {
+  test::Scratch dir("flatten-fail");
+  std::ofstream(dir / "bump.obj") << grid_obj(12);
+  io::save_gltf(pipeline::make_demo_asset({16, 32}), (dir / "demo.glb").string());
+  // check_input_error: exit 1, one stderr line naming the file and the reason, nothing on
+  // stdout, no file written (output, report or log).
+  for (const char* n : {"1", "3"})
+    test::check_input_error(dir,
+                            "flatten " + quoted(dir / "bump.obj") + " -o " + quoted(dir / "out.obj") + " --report " +
+                                quoted(dir / "report.json") + " --log " + quoted(dir / "log.csv") +
+                                " --test-break-factorization " + n,
+                            dir / "bump.obj", "factorization failed: matrix not positive definite");
+  test::check_input_error(dir,
+                          "flatten " + quoted(dir / "demo.glb") + " -o " + quoted(dir / "out.glb") +
+                              " --test-break-factorization 2",
+                          dir / "demo.glb", "chart 0: factorization failed");
+
+  // The same input without the hook converges for a legitimate reason, reported.
+  auto r = run_uvpress("flatten " + quoted(dir / "bump.obj") + " -o " + quoted(dir / "out.obj") + " --report " +
+                       quoted(dir / "report.json"));
+  INFO(r.err);
+  REQUIRE(r.exit_code == 0);
+  auto report = nlohmann::json::parse(slurp(dir / "report.json"));
+  CHECK(report["converged"] == true);
+  const std::string stop = report["stop"];
+  CHECK((stop == "relative change" || stop == "gradient norm" || stop == "stalled at floor"));
+  CHECK_FALSE(report.contains("failure"));
+}
+
 TEST_CASE("flatten CLI: the same output bits with 1 and 2 threads (60K triangles)", "[flatten][cli]") {
   test::Scratch dir("flatten-threads");
   std::ofstream(dir / "big.obj") << grid_obj(175);  // 61,250 triangles: above the threading threshold

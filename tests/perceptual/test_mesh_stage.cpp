@@ -246,6 +246,66 @@ TEST_CASE("mesh stage: degenerate input triangles are passive, bad input throws"
   CHECK_THROWS_AS(fit_chart(c.uv, c.tris, targets, o), std::invalid_argument);
 }
 
+TEST_CASE("mesh stage: a failed factorization is the chart's status, the input kept", "[perceptual][mesh]") {
+  const Chart c = grid(10, 2.0, 0.2);
+  std::vector<TriangleTarget> targets(c.triangle_count(), target(I2, {0.5, 0, 0, 0.5}));
+  const auto ok = fit_chart(c.uv, c.tris, targets, {});
+  CHECK(ok.status == MeshStageStatus::Optimized);
+  CHECK_FALSE(ok.failed());
+  CHECK(ok.failure.empty());
+  CHECK(deviation_from_scaled(ok.uv, c.uv, 0.5) < 1e-6);
+
+  // The fit term's matrix (the first factorization) fails: nothing moves, and it says so.
+  MeshStageOptions o;
+  o.test_break_factorization = 1;
+  const auto r = fit_chart(c.uv, c.tris, targets, o);
+  CHECK(r.status == MeshStageStatus::FactorizationFailed);
+  CHECK(r.failed());
+  CHECK(std::string(to_string(r.status)) == "factorization failed");
+  CHECK_THAT(r.failure, Catch::Contains("fit matrix") && Catch::Contains("not positive definite"));
+  CHECK(r.uv == c.uv);
+  CHECK(r.iterations == 0);
+  CHECK(r.factorizations == 1);
+  CHECK(r.flips == 0);
+}
+
+TEST_CASE("mesh stage: a failed full-Hessian factorization is reported, the iterate stays flip-free",
+          "[perceptual][mesh]") {
+  // Random rotation targets with weak weights: triangles shrink onto their barriers, and
+  // with many barriers active the full Hessian is factorized.
+  const Chart c = grid(16, 2.0, 0.3, 11);
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> angle(0, 6.283185307179586), lambda(0.05, 1), logw(-9, -3);
+  std::vector<TriangleTarget> targets;
+  for (size_t t = 0; t < c.triangle_count(); ++t) {
+    const double b = angle(rng), l1 = lambda(rng), l2 = lambda(rng);
+    const double cb = std::cos(b), sb = std::sin(b);
+    TriangleTarget x = target(rot(angle(rng)), {l1 * cb * cb + l2 * sb * sb, (l1 - l2) * cb * sb,
+                                                (l1 - l2) * cb * sb, l1 * sb * sb + l2 * cb * cb});
+    x.weight_rotation = std::pow(10.0, logw(rng)), x.weight_stretch = std::pow(10.0, logw(rng));
+    targets.push_back(x);
+  }
+  const auto ok = fit_chart(c.uv, c.tris, targets, {});
+  INFO(ok.factorizations << " factorizations, " << ok.cg_iterations << " CG iterations");
+  REQUIRE(ok.factorizations >= 2);
+  CHECK(ok.status == MeshStageStatus::Optimized);
+  MeshStageOptions o;
+  o.test_break_factorization = 2;
+  const auto r = fit_chart(c.uv, c.tris, targets, o);
+  CHECK(r.status == MeshStageStatus::FactorizationFailed);
+  CHECK_THAT(r.failure, Catch::Contains("full Hessian") && Catch::Contains("not positive definite"));
+  CHECK(r.flips == 0);
+  for (double x : r.uv) CHECK(std::isfinite(x));
+}
+
+TEST_CASE("mesh stage: a chart with no usable triangle says so", "[perceptual][mesh]") {
+  const std::vector<double> uv{0, 0, 1, 0, 2, 0};  // collinear: passive
+  const auto r = fit_chart(uv, {0, 1, 2}, {target(I2, I2)}, {});
+  CHECK(r.status == MeshStageStatus::NoActiveTriangles);
+  CHECK_FALSE(r.failed());
+  CHECK(r.uv == uv);
+}
+
 TEST_CASE("mesh stage: barrier and global energy derivatives match finite differences", "[perceptual][mesh]") {
   // Barrier: C2 at the threshold, +inf at 0.
   for (double x : {0.01, 0.05, 0.1, 0.19}) {

@@ -51,12 +51,17 @@ double as_written_obj(double x) {
   return std::strtod(buf, nullptr);
 }
 
+// A failed solve (factorization, line search), flipped or non-finite UVs: exit 1 naming
+// the input, nothing written. A stall at the floor or the iteration limit is a result.
 flatten::Result run_chart(const Mesh& mesh, const flatten::Options& o, const std::string& file, const std::string& what) {
+  flatten::Result r;
   try {
-    return flatten::flatten(mesh, o);
+    r = flatten::flatten(mesh, o);
   } catch (const flatten::FlattenError& e) {
     throw InputError(file, what + e.what());
   }
+  if (std::string why = flatten::invalid_reason(r); !why.empty()) throw InputError(file, what + why);
+  return r;
 }
 
 // Charts of one glTF primitive, as disk meshes indexed by welded UV vertex.
@@ -236,6 +241,7 @@ void add_flatten(CLI::App& app, Globals& g) {
     std::string input, output, method = "progressive", log;
     int max_iterations = 5000;
     double bound = 60;
+    int break_factorization = 0;
   };
   auto a = std::make_shared<Args>();
   cmd->add_option("input", a->input, "Disk mesh (.obj, .off) or glTF asset (.gltf, .glb)")->required();
@@ -248,6 +254,8 @@ void add_flatten(CLI::App& app, Globals& g) {
   cmd->add_option("--bound", a->bound, "Distortion bound K of the progressive references")
       ->capture_default_str()
       ->check(CLI::Range(1.0001, 1e12));
+  // Test hook, not in --help: the N-th numeric factorization fails (not positive definite).
+  cmd->add_option("--test-break-factorization", a->break_factorization)->group("");
   cmd->callback([&g, a] {
     g.action = [&g, a] {
       auto t0 = std::chrono::steady_clock::now();
@@ -271,6 +279,7 @@ void add_flatten(CLI::App& app, Globals& g) {
       o.method = *flatten::parse_method(a->method);
       o.max_iterations = a->max_iterations;
       o.K = a->bound;
+      o.test_break_factorization = a->break_factorization;
       if (g.verbose)
         o.on_iteration = [](const flatten::IterationRecord& r) {
           std::fprintf(stderr, "iter %3d %-6s E %.9f  e_n %.2e  max D %.4g  D<=K %.4f  t %.4f  step %.3g  %.3f s\n",
