@@ -181,7 +181,7 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
     std::vector<size_t> welded_count(L.uv_sets.size());
     std::vector<std::vector<perceptual::TriangleTarget>> chart_targets(L.uv_sets.size());
     double old_used = 0;  // eq. 20: source texels under the input's charts
-    size_t layout_flips = 0, rigid = 0;
+    size_t layout_flips = 0, rigid = 0, mesh_failed = 0;
     TriangleCounts tri;
     for (size_t si = 0; si < L.uv_sets.size(); ++si) {
       const io::Primitive& prim = asset.primitives[size_t(L.uv_sets[si].primitive)];
@@ -276,7 +276,14 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
       std::vector<perceptual::TriangleTarget> targets;
       targets.reserve(ch.triangles.size());
       for (uint32_t t : ch.triangles) targets.push_back(chart_targets[ch.uv_set][t]);
-      ch.new_uv = perceptual::fit_chart(ch.uv, ch.local, targets, mesh_options).uv;
+      perceptual::MeshStageResult fit = perceptual::fit_chart(ch.uv, ch.local, targets, mesh_options);
+      ch.new_uv = std::move(fit.uv);
+      // A failed factorization leaves the chart at its input (or last accepted, flip-free)
+      // shape: said in the report and as a warning, never passed off as optimized.
+      if (fit.failed()) {
+        ++mesh_failed;
+        if (mesh_failed == 1) warnings.push_back("layout " + std::to_string(li) + " chart " + std::to_string(c) + ": mesh stage " + fit.failure);
+      }
       if (progress) progress("mesh stage (layout " + std::to_string(li) + ")", c + 1, charts.size());
     }
     // No triangle may flip relative to the input.
@@ -382,6 +389,8 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
     jl["chart_cost_ratio"] = choice.cost_ratio;
     jl["flips"] = layout_flips;
     if (o.optimize) {
+      jl["mesh_stage_failed_charts"] = mesh_failed;
+      if (mesh_failed > 1) warnings.push_back("layout " + std::to_string(li) + ": the mesh stage failed on " + std::to_string(mesh_failed) + " charts (kept unreshaped)");
       jl["triangle_stage"] = tri.to_json(o.triangle);
       infeasible += tri.optimized - tri.feasible, optimized += tri.optimized;
     }

@@ -345,37 +345,47 @@ ViewSetDesc square_views(const Square& q, uint32_t size) {
 
 }  // namespace
 
+// GMSD and tile lattice of every candidate on the CPU backend ([0]) and lavapipe ([1]).
+struct BothScores {
+  std::vector<float> gmsd[2], lattice[2];
+};
+BothScores score_on_both(const ViewSetDesc& d, const std::vector<ViewCandidate>& c) {
+  BothScores out;
+  int b = 0;
+  for (auto* e : {make_cpu_engine({}).release(), lavapipe().release()}) {
+    std::unique_ptr<Engine> engine(e);
+    auto views = engine->prepare_views(d);
+    out.gmsd[b].resize(c.size()), out.lattice[b].resize(c.size());
+    engine->score_views(*views, c.data(), c.size(), out.gmsd[b].data(), nullptr, out.lattice[b].data());
+    CHECK(engine->validation_errors() == 0);
+    ++b;
+  }
+  for (size_t k = 0; k < c.size(); ++k) CHECK(std::abs(out.gmsd[0][k] - out.gmsd[1][k]) <= 1e-3 * out.gmsd[0][k] + 1e-4);
+  CHECK(out.lattice[0] == out.lattice[1]);
+  return out;
+}
+
 TEST_CASE("Views: a 48-texel view with 5-texel detail is lossless at J = I and shrinking costs", "[engine][views][vulkan]") {
   // The square's bounding square spans 48 texels: before views resolved their texels the
   // candidate tile was capped at 32 texels and the identity itself cost ~0.05 here.
   const Square q = square(48, 5, false);
   const ViewSetDesc d = square_views(q, 64);
   REQUIRE(d.views.size() == 2);
-  std::vector<float> g[2], lat[2];
-  int b = 0;
-  for (auto* e : {make_cpu_engine({}).release(), lavapipe().release()}) {
-    std::unique_ptr<Engine> engine(e);
-    INFO(engine->device().backend);
-    auto views = engine->prepare_views(d);
-    std::vector<ViewCandidate> c;
-    for (uint32_t v = 0; v < 2; ++v)
-      for (float l : {1.0f, 0.9f, 0.7f, 0.5f}) c.push_back(candidate(v, l, l, 0.0f));
-    g[b].resize(c.size()), lat[b].resize(c.size());
-    engine->score_views(*views, c.data(), c.size(), g[b].data(), nullptr, lat[b].data());
+  std::vector<ViewCandidate> c;
+  for (uint32_t v = 0; v < 2; ++v)
+    for (float l : {1.0f, 0.9f, 0.7f, 0.5f}) c.push_back(candidate(v, l, l, 0.0f));
+  const BothScores r = score_on_both(d, c);
+  for (int b = 0; b < 2; ++b)
     for (uint32_t v = 0; v < 2; ++v) {
-      const float* s = &g[b][4 * v];
-      INFO("view " << v << ": " << s[0] << " " << s[1] << " " << s[2] << " " << s[3]);
-      for (int k = 0; k < 4; ++k) CHECK(lat[b][4 * v + size_t(k)] == 1.0f);  // J's own lattice
-      CHECK(s[0] < 1e-3);                      // the identity reproduces the reference
-      CHECK(s[2] > 2 * s[1]);                  // lambda 0.7 clearly costs more than 0.9:
-      CHECK(s[2] > s[1] + 1e-3);               // twice as much, and by more than 1e-3
+      const float* s = &r.gmsd[b][4 * v];
+      INFO((b ? "vulkan" : "cpu") << " view " << v << ": " << s[0] << " " << s[1] << " " << s[2] << " " << s[3]);
+      for (int k = 0; k < 4; ++k) CHECK(r.lattice[b][4 * v + size_t(k)] == 1.0f);  // J's own lattice
+      CHECK(s[0] < 1e-3);         // the identity reproduces the reference
+      CHECK(s[2] > 2 * s[1]);     // lambda 0.7 clearly costs more than 0.9:
+      CHECK(s[2] > s[1] + 1e-3);  // twice as much, and by more than 1e-3
       CHECK(s[1] > s[0]);
       CHECK(s[3] > s[2]);
     }
-    CHECK(engine->validation_errors() == 0);
-    ++b;
-  }
-  for (size_t k = 0; k < g[0].size(); ++k) CHECK(std::abs(g[0][k] - g[1][k]) <= 1e-3 * g[0][k] + 1e-4);
 }
 
 TEST_CASE("Views: a one-ring across a UV seam gets its own region of the candidate", "[engine][views][vulkan]") {
@@ -392,32 +402,21 @@ TEST_CASE("Views: a one-ring across a UV seam gets its own region of the candida
     // The neighbour's anchor is the seam vertex in its own chart: 128 texels away in s.
     CHECK(std::abs(std::abs(other.anchor_s - own.anchor_s) - 128) < 30);
   }
-  std::vector<float> g[2];
-  int b = 0;
-  for (auto* e : {make_cpu_engine({}).release(), lavapipe().release()}) {
-    std::unique_ptr<Engine> engine(e);
-    INFO(engine->device().backend);
-    auto views = engine->prepare_views(d);
-    std::vector<ViewCandidate> c;
-    for (uint32_t v = 0; v < 2; ++v)
-      for (float l : {1.0f, 0.6f, 0.4f}) c.push_back(candidate(v, l, l, l < 1 ? 0.2f : 0.0f));
-    g[b].resize(c.size());
-    std::vector<float> lat(c.size());
-    engine->score_views(*views, c.data(), c.size(), g[b].data(), nullptr, lat.data());
+  std::vector<ViewCandidate> c;
+  for (uint32_t v = 0; v < 2; ++v)
+    for (float l : {1.0f, 0.6f, 0.4f}) c.push_back(candidate(v, l, l, l < 1 ? 0.2f : 0.0f));
+  const BothScores r = score_on_both(d, c);
+  for (int b = 0; b < 2; ++b)
     for (uint32_t v = 0; v < 2; ++v) {
-      const float* s = &g[b][3 * v];
-      INFO("view " << v << ": " << s[0] << " " << s[1] << " " << s[2]);
+      const float* s = &r.gmsd[b][3 * v];
+      INFO((b ? "vulkan" : "cpu") << " view " << v << ": " << s[0] << " " << s[1] << " " << s[2]);
       // One tile for both charts would span 128 texels and be coarsened 2-4x: the identity
       // would no longer be lossless. Two regions keep J's lattice.
-      CHECK(lat[3 * v] == 1.0f);
+      CHECK(r.lattice[b][3 * v] == 1.0f);
       CHECK(s[0] < 1e-3);
       CHECK(s[1] > s[0] + 1e-3);
       CHECK(s[2] > s[1]);
     }
-    CHECK(engine->validation_errors() == 0);
-    ++b;
-  }
-  for (size_t k = 0; k < g[0].size(); ++k) CHECK(std::abs(g[0][k] - g[1][k]) <= 1e-3 * g[0][k] + 1e-4);
 }
 
 TEST_CASE("Views: a triangle too large for one view is seen through patches that resolve its texels", "[engine][views]") {

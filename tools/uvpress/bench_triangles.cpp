@@ -56,6 +56,35 @@ AssetWork load_asset(const std::string& spec) {
   return a;
 }
 
+// Standard deviation of the source luminance over a triangle (bilinear samples at 66
+// barycentric grid points): a triangle is "detailed" when it is at least kDetailed.
+constexpr double kDetailed = 0.02;
+double luminance_spread(const perceptual::TriangleViewInput& in, const std::vector<float>& lum, uint32_t t) {
+  const uint32_t* f = &in.indices[3 * t];
+  const double W = in.texture_width, H = in.texture_height;
+  auto sample = [&](double s, double tt) {
+    s = std::clamp(s, 0.0, W - 1), tt = std::clamp(tt, 0.0, H - 1);
+    const size_t i0 = size_t(s), j0 = size_t(tt), i1 = std::min(i0 + 1, size_t(W) - 1), j1 = std::min(j0 + 1, size_t(H) - 1);
+    const double a = s - double(i0), b = tt - double(j0);
+    const size_t w = in.texture_width;
+    return (1 - b) * ((1 - a) * lum[j0 * w + i0] + a * lum[j0 * w + i1]) + b * ((1 - a) * lum[j1 * w + i0] + a * lum[j1 * w + i1]);
+  };
+  const int n = 10;
+  double sum = 0, sum2 = 0;
+  int count = 0;
+  for (int i = 0; i <= n; ++i)
+    for (int j = 0; i + j <= n; ++j) {
+      const double l1 = double(i) / n, l2 = double(j) / n, l0 = 1 - l1 - l2;
+      double s = 0, tt = 0;
+      const double l[3] = {l0, l1, l2};
+      for (int k = 0; k < 3; ++k) s += l[k] * (in.uvs[2 * f[k]] * W - 0.5), tt += l[k] * (in.uvs[2 * f[k] + 1] * H - 0.5);
+      const double y = sample(s, tt);
+      sum += y, sum2 += y * y, ++count;
+    }
+  const double mean = sum / count;
+  return std::sqrt(std::max(0.0, sum2 / count - mean * mean));
+}
+
 void bench_triangles(const Globals& g, const std::vector<std::string>& specs, uint32_t limit, int evaluations,
                      bool early_stop) {
   std::vector<AssetWork> work;
@@ -72,7 +101,7 @@ void bench_triangles(const Globals& g, const std::vector<std::string>& specs, ui
       perceptual::TriangleStageStats sum;
       size_t triangles = 0, identity_lossless = 0, resolved = 0, complete = 0, feasible = 0, coarse = 0, views = 0;
       size_t evals = 0;
-      std::vector<double> shrink_cost, lambda_area;
+      std::vector<double> shrink_cost, shrink_cost_detailed, lambda_area;
       size_t first = 0;  // of the current part, in the asset's triangle order
       for (const auto& w : a.parts) {
         const io::Primitive& p = w.primitive;
@@ -104,6 +133,7 @@ void bench_triangles(const Globals& g, const std::vector<std::string>& specs, ui
           views += size_t(r.views);
           evals += size_t(r.evaluations);
           shrink_cost.push_back(half[k] - r.identity_gmsd);
+          if (luminance_spread(in, w.luminance, which[k]) >= kDetailed) shrink_cost_detailed.push_back(half[k] - r.identity_gmsd);
           lambda_area.push_back(r.lambda1 * r.lambda2);
         }
       }
@@ -130,6 +160,8 @@ void bench_triangles(const Globals& g, const std::vector<std::string>& specs, ui
                                      {"feasible", double(feasible) / T},
                                      {"shrink_cost_p50", quantile(shrink_cost, 0.5)},
                                      {"shrink_cost_p75", quantile(shrink_cost, 0.75)},
+                                     {"detailed", double(shrink_cost_detailed.size()) / T},
+                                     {"shrink_cost_detailed_median", quantile(shrink_cost_detailed, 0.5)},
                                      {"lambda_area_quartiles",
                                       {quantile(lambda_area, 0.25), quantile(lambda_area, 0.5), quantile(lambda_area, 0.75)}}};
       std::printf("%s\n", line.dump().c_str());
