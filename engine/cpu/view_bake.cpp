@@ -122,7 +122,7 @@ std::vector<float> bake_tile(const TileMap& m, const float* reference, uint32_t*
   const float mu = kSmoothness * count / float(std::max(seen_count, 1u));
   // A = K / Q + mu L (L the 4-neighbour graph Laplacian of the seen texels);
   // b = R / Q - mean rowsum(K) / Q.
-  std::vector<float> A(size_t(n) * 9), diag(n), r(n), z(n), p(n), Ap(n);
+  std::vector<float> A(size_t(n) * 9), diag(n), r(n), z(n), Ap(n);
   const float inv_q = 1.0f / kFixedPoint;
   for (uint32_t t = 0; t < n; ++t) {
     int32_t rowsum = 0;
@@ -143,18 +143,21 @@ std::vector<float> bake_tile(const TileMap& m, const float* reference, uint32_t*
     bt -= mean * (float(rowsum) * inv_q);
     r[t] = bt;
   }
-  const int32_t h = int32_t(m.height);
-  auto apply = [&](const std::vector<float>& in, std::vector<float>& out) {
-    for (int32_t jj = 0; jj < h; ++jj)
-      for (int32_t ii = 0; ii < int32_t(w); ++ii) {
-        const uint32_t t = uint32_t(jj) * w + uint32_t(ii);
+  // p lives in a zero-padded (w + 2) x (h + 2) tile, so the stencil reads its 9 neighbours
+  // without bounds checks (the view_score.comp layout); out-of-tile terms add A * 0 = 0,
+  // the same sums as skipping them.
+  const uint32_t h = m.height, W2 = w + 2;
+  std::vector<float> pp(size_t(W2) * (h + 2), 0.0f);
+  const int32_t offset[9] = {-int32_t(W2) - 1, -int32_t(W2), -int32_t(W2) + 1, -1, 0, 1,
+                             int32_t(W2) - 1, int32_t(W2), int32_t(W2) + 1};
+  auto padded = [&](uint32_t t) { return size_t(t / w + 1) * W2 + t % w + 1; };
+  auto apply = [&](std::vector<float>& out) {
+    for (uint32_t jj = 0, t = 0; jj < h; ++jj)
+      for (uint32_t ii = 0; ii < w; ++ii, ++t) {
+        const float* a = &A[size_t(t) * 9];
+        const float* c = &pp[size_t(jj + 1) * W2 + ii + 1];
         float acc = 0.0f;
-        for (int32_t dj = -1; dj <= 1; ++dj)
-          for (int32_t di = -1; di <= 1; ++di) {
-            int32_t i2 = ii + di, j2 = jj + dj;
-            if (i2 < 0 || j2 < 0 || i2 >= int32_t(w) || j2 >= h) continue;
-            acc += A[size_t(t) * 9 + slot(di, dj)] * in[uint32_t(j2) * w + uint32_t(i2)];
-          }
+        for (int s = 0; s < 9; ++s) acc += a[s] * c[offset[s]];
         out[t] = acc;
       }
   };
@@ -167,20 +170,25 @@ std::vector<float> bake_tile(const TileMap& m, const float* reference, uint32_t*
   const float bb = dot(r, r);
   uint32_t it = 0;
   if (bb > 0.0f) {
-    for (uint32_t t = 0; t < n; ++t) z[t] = r[t] / diag[t], p[t] = z[t];
+    for (uint32_t t = 0; t < n; ++t) z[t] = r[t] / diag[t], pp[padded(t)] = z[t];
     float rz = dot(r, z);
     const float stop = kBakeTolerance * kBakeTolerance * bb;
     while (it < kBakeMaxIterations) {
       ++it;
-      apply(p, Ap);
-      float alpha = rz / dot(p, Ap);
-      for (uint32_t t = 0; t < n; ++t) x[t] += alpha * p[t], r[t] -= alpha * Ap[t];
+      apply(Ap);
+      float pap = 0.0f;
+      for (uint32_t t = 0; t < n; ++t) pap += pp[padded(t)] * Ap[t];
+      float alpha = rz / pap;
+      for (uint32_t t = 0; t < n; ++t) x[t] += alpha * pp[padded(t)], r[t] -= alpha * Ap[t];
       if (dot(r, r) <= stop) break;
       for (uint32_t t = 0; t < n; ++t) z[t] = r[t] / diag[t];
       float rz_next = dot(r, z);
       float beta = rz_next / rz;
       rz = rz_next;
-      for (uint32_t t = 0; t < n; ++t) p[t] = z[t] + beta * p[t];
+      for (uint32_t t = 0; t < n; ++t) {
+        float& pt = pp[padded(t)];
+        pt = z[t] + beta * pt;
+      }
     }
   }
   if (iterations) *iterations = it;
