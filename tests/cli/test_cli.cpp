@@ -127,3 +127,27 @@ TEST_CASE("CLI: bench luminance prints one JSON line per backend, validation cle
   CHECK(backends.count("cpu"));
   CHECK(backends.count("vulkan"));  // lavapipe at least
 }
+
+TEST_CASE("CLI: reparam's summary line says when the density cap kept it under --cost, and counts the triangle stage", "[cli][reparam]") {
+  test::Scratch dir("cli-reparam-summary");
+  io::save_gltf(pipeline::make_demo_asset({12, 128}), (dir / "demo.glb").string());
+  // --cost 1: the optimized layout shrinks its flat triangles, so at the source density it
+  // cannot fill the whole budget.
+  auto r = run_uvpress("reparam " + quoted(dir / "demo.glb") + " -o " + quoted(dir / "out.glb") +
+                       " --cost 1 --evaluations 12 --view-size 16 --report " + quoted(dir / "r.json"));
+  INFO(r.out << r.err);
+  REQUIRE(r.exit_code == 0);
+  std::ifstream in(dir / "r.json");
+  auto report = nlohmann::json::parse(in);
+  CHECK(report["cost_ratio"].get<double>() < 0.98);
+  CHECK_THAT(r.out, Catch::Contains("capped at the source texel density"));
+  const auto& ts = report["layouts"][0]["triangle_stage"];
+  CHECK(ts["triangles"].get<size_t>() == report["triangles_optimized"].get<size_t>());
+  CHECK(ts["feasible"].get<size_t>() + ts["infeasible"].get<size_t>() == ts["triangles"].get<size_t>());
+  CHECK(ts["evaluations"] == 12);
+  CHECK(ts["early_stop"] == false);
+  // Without optimization the repacked layout reaches the budget: no cap to explain.
+  auto k = run_uvpress("reparam " + quoted(dir / "demo.glb") + " -o " + quoted(dir / "keep.glb") + " --cost 0.3 --no-optimize");
+  REQUIRE(k.exit_code == 0);
+  CHECK_THAT(k.out, !Catch::Contains("capped"));
+}

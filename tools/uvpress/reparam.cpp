@@ -100,9 +100,19 @@ void add_reparam(CLI::App& app, Globals& g) {
       if (const size_t n = report["triangles_infeasible"].get<size_t>())
         infeasible = ", " + std::to_string(n) + " of " + std::to_string(report["triangles_optimized"].get<size_t>()) +
                      " triangles infeasible at epsilon (kept at the identity)";
-      std::printf("%s (%s, %llu texels) -> %s (%s, %llu texels), cost ratio %.3f%s, %.1f s\n", input->c_str(),
+      // A layout packed at the source texel density could not use the whole budget: say why
+      // the ratio is below --cost.
+      std::string capped;
+      bool at_density = false;
+      for (const auto& l : report["layouts"]) at_density |= l.contains("scale") && l["scale"].get<double>() >= 0.999;
+      if (o->size == 0 && o->max_gmsd == 0 && at_density && report["cost_ratio"].get<double>() < 0.98 * o->cost) {
+        char text[96];
+        std::snprintf(text, sizeof text, " (--cost %.3g: capped at the source texel density)", o->cost);
+        capped = text;
+      }
+      std::printf("%s (%s, %llu texels) -> %s (%s, %llu texels), cost ratio %.3f%s%s, %.1f s\n", input->c_str(),
                   human_bytes(in_bytes).c_str(), (unsigned long long)old_t, output->c_str(), human_bytes(out_bytes).c_str(),
-                  (unsigned long long)new_t, report["cost_ratio"].get<double>(), infeasible.c_str(), seconds);
+                  (unsigned long long)new_t, report["cost_ratio"].get<double>(), capped.c_str(), infeasible.c_str(), seconds);
       if (g.verbose)
         for (auto& [stage, s] : report["stages"].items()) std::fprintf(stderr, "%s: %.2f s\n", stage.c_str(), s.get<double>());
       nlohmann::ordered_json out = {{"input", *input}, {"output", *output}, {"device", report["device"]},
