@@ -150,7 +150,13 @@ std::vector<float> bake_tile(const TileMap& m, const float* reference, uint32_t*
   std::vector<float> pp(size_t(W2) * (h + 2), 0.0f);
   const int32_t offset[9] = {-int32_t(W2) - 1, -int32_t(W2), -int32_t(W2) + 1, -1, 0, 1,
                              int32_t(W2) - 1, int32_t(W2), int32_t(W2) + 1};
-  auto padded = [&](uint32_t t) { return size_t(t / w + 1) * W2 + t % w + 1; };
+  // f(t, c) for every texel t in order, c its index in the padded tile.
+  auto each = [&](auto&& f) {
+    for (uint32_t jj = 0, t = 0; jj < h; ++jj) {
+      size_t c = size_t(jj + 1) * W2 + 1;
+      for (uint32_t ii = 0; ii < w; ++ii, ++t, ++c) f(t, c);
+    }
+  };
   auto apply = [&](std::vector<float>& out) {
     for (uint32_t jj = 0, t = 0; jj < h; ++jj)
       for (uint32_t ii = 0; ii < w; ++ii, ++t) {
@@ -161,34 +167,36 @@ std::vector<float> bake_tile(const TileMap& m, const float* reference, uint32_t*
         out[t] = acc;
       }
   };
-  auto dot = [&](const std::vector<float>& a, const std::vector<float>& b) {
-    float s = 0.0f;
-    for (uint32_t t = 0; t < n; ++t) s += a[t] * b[t];
-    return s;
+  // Dot products in 8 interleaved partial sums added in a fixed order: deterministic, and
+  // not bound by the latency of one long chain of additions.
+  auto dot = [&](const float* a, const float* b, uint32_t count) {
+    float part[8] = {};
+    uint32_t t = 0;
+    for (; t + 8 <= count; t += 8)
+      for (int k = 0; k < 8; ++k) part[k] += a[t + uint32_t(k)] * b[t + uint32_t(k)];
+    for (; t < count; ++t) part[t % 8] += a[t] * b[t];
+    return ((part[0] + part[1]) + (part[2] + part[3])) + ((part[4] + part[5]) + (part[6] + part[7]));
   };
   // Jacobi-preconditioned conjugate gradients from x = 0.
-  const float bb = dot(r, r);
+  const float bb = dot(r.data(), r.data(), n);
   uint32_t it = 0;
   if (bb > 0.0f) {
-    for (uint32_t t = 0; t < n; ++t) z[t] = r[t] / diag[t], pp[padded(t)] = z[t];
-    float rz = dot(r, z);
+    each([&](uint32_t t, size_t c) { z[t] = r[t] / diag[t], pp[c] = z[t]; });
+    float rz = dot(r.data(), z.data(), n);
     const float stop = kBakeTolerance * kBakeTolerance * bb;
     while (it < kBakeMaxIterations) {
       ++it;
       apply(Ap);
-      float pap = 0.0f;
-      for (uint32_t t = 0; t < n; ++t) pap += pp[padded(t)] * Ap[t];
-      float alpha = rz / pap;
-      for (uint32_t t = 0; t < n; ++t) x[t] += alpha * pp[padded(t)], r[t] -= alpha * Ap[t];
-      if (dot(r, r) <= stop) break;
+      // p's interior, unpadded, for the dot product and the update of x.
+      each([&](uint32_t t, size_t c) { z[t] = pp[c]; });
+      float alpha = rz / dot(z.data(), Ap.data(), n);
+      for (uint32_t t = 0; t < n; ++t) x[t] += alpha * z[t], r[t] -= alpha * Ap[t];
+      if (dot(r.data(), r.data(), n) <= stop) break;
       for (uint32_t t = 0; t < n; ++t) z[t] = r[t] / diag[t];
-      float rz_next = dot(r, z);
+      float rz_next = dot(r.data(), z.data(), n);
       float beta = rz_next / rz;
       rz = rz_next;
-      for (uint32_t t = 0; t < n; ++t) {
-        float& pt = pp[padded(t)];
-        pt = z[t] + beta * pt;
-      }
+      each([&](uint32_t t, size_t c) { pp[c] = z[t] + beta * pp[c]; });
     }
   }
   if (iterations) *iterations = it;
