@@ -5,6 +5,7 @@
 #include "core/disjoint_sets.h"
 
 #include <algorithm>
+#include <cmath>
 #include <numeric>
 
 namespace uvpress::flatten {
@@ -112,6 +113,70 @@ DiskTopology check_disk(const std::vector<uint32_t>& input_triangles, size_t ver
     std::string msg = "not a disk: ";
     for (size_t i = 0; i < why.size(); ++i) msg += (i ? ", " : "") + why[i];
     throw FlattenError(msg);
+  }
+  return out;
+}
+
+FilledHoles fill_holes(const std::vector<double>& positions, const std::vector<uint32_t>& triangles) {
+  FilledHoles out{positions, triangles, 0};
+  const size_t nv = positions.size() / 3, nt = triangles.size() / 3;
+  // Directed half-edges; a boundary half-edge has no reverse twin.
+  std::vector<std::pair<uint32_t, uint32_t>> he;
+  he.reserve(3 * nt);
+  for (size_t t = 0; t < nt; ++t)
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t a = triangles[3 * t + size_t(k)], b = triangles[3 * t + size_t((k + 1) % 3)];
+      if (a >= nv || b >= nv || a == b) return out;
+      he.push_back({a, b});
+    }
+  std::sort(he.begin(), he.end());
+  for (size_t i = 1; i < he.size(); ++i)
+    if (he[i] == he[i - 1]) return out;  // inconsistent orientation or a non-manifold edge
+  std::vector<uint32_t> next(nv, UINT32_MAX);
+  for (const auto& [a, b] : he) {
+    if (std::binary_search(he.begin(), he.end(), std::make_pair(b, a))) continue;
+    if (next[a] != UINT32_MAX) return out;  // two boundary edges leave a: a non-manifold vertex
+    next[a] = b;
+  }
+  // The loops, with their 3-D lengths.
+  std::vector<std::vector<uint32_t>> loops;
+  std::vector<double> length;
+  std::vector<uint8_t> seen(nv, 0);
+  for (size_t v = 0; v < nv; ++v) {
+    if (next[v] == UINT32_MAX || seen[v]) continue;
+    std::vector<uint32_t> loop;
+    double len = 0;
+    uint32_t w = uint32_t(v);
+    while (!seen[w]) {
+      seen[w] = 1;
+      loop.push_back(w);
+      const uint32_t n = next[w];
+      if (n == UINT32_MAX) return out;  // an open boundary path: not a manifold boundary
+      double d2 = 0;
+      for (int k = 0; k < 3; ++k) d2 += std::pow(positions[3 * size_t(n) + size_t(k)] - positions[3 * size_t(w) + size_t(k)], 2);
+      len += std::sqrt(d2);
+      w = n;
+    }
+    if (w != v) return out;  // the walk closed somewhere else
+    loops.push_back(std::move(loop));
+    length.push_back(len);
+  }
+  if (loops.size() < 2) return out;
+  const size_t keep = size_t(std::max_element(length.begin(), length.end()) - length.begin());
+  for (size_t l = 0; l < loops.size(); ++l) {
+    if (l == keep) continue;
+    const auto& loop = loops[l];
+    const uint32_t c = uint32_t(out.positions.size() / 3);
+    double centroid[3] = {0, 0, 0};
+    for (uint32_t v : loop)
+      for (int k = 0; k < 3; ++k) centroid[k] += positions[3 * size_t(v) + size_t(k)] / double(loop.size());
+    out.positions.insert(out.positions.end(), centroid, centroid + 3);
+    // The boundary edge a -> b lies in a triangle (a, b, .): the fan takes it as b -> a.
+    for (size_t i = 0; i < loop.size(); ++i) {
+      const uint32_t a = loop[i], b = loop[(i + 1) % loop.size()];
+      out.triangles.insert(out.triangles.end(), {b, a, c});
+    }
+    ++out.filled_loops;
   }
   return out;
 }

@@ -51,6 +51,38 @@ void AtomicWriter::commit() {
   entries_.clear();
 }
 
+namespace {
+
+// Creates `dir` (and its parents) when missing and checks that a file can be created in
+// it. `path` is what the error names.
+void probe_folder(const fs::path& dir, const std::string& path) {
+  std::error_code ec;
+  if (!fs::exists(dir, ec)) fs::create_directories(dir, ec);
+  if (!fs::is_directory(dir))
+    throw InputError(path, "cannot create the output folder '" + dir.string() + "'" + (ec ? ": " + ec.message() : ""));
+  std::string probe = (dir / ".uvpress-probe-XXXXXX").string();
+  int fd = mkstemp(probe.data());
+  if (fd < 0) throw InputError(path, "cannot write in the folder '" + dir.string() + "': " + std::strerror(errno));
+  ::close(fd);
+  std::remove(probe.c_str());
+}
+
+}  // namespace
+
+void prepare_output_file(const std::string& path) {
+  fs::path target(path);
+  if (target.filename().empty()) throw InputError(path, "names a folder, not a file");
+  std::error_code ec;
+  if (fs::is_directory(target, ec)) throw InputError(path, "is a folder, not a file");
+  probe_folder(target.parent_path().empty() ? fs::path(".") : target.parent_path(), path);
+}
+
+void prepare_output_folder(const std::string& dir) {
+  std::error_code ec;
+  if (fs::exists(dir, ec) && !fs::is_directory(dir, ec)) throw InputError(dir, "exists and is not a folder");
+  probe_folder(fs::path(dir), dir);
+}
+
 std::vector<uint8_t> read_file(const std::string& path) {
   RegularFile file(path, path);
   if (file.size() > kMaxInputFileBytes)

@@ -29,6 +29,13 @@ class AtomicWriter {
   std::vector<Entry> entries_;
 };
 
+// The one rule for outputs, applied by every command before any work: the folder an output
+// file goes in is created when missing, and a file must be creatable there (a temporary is
+// created and removed). Throws InputError(path, reason).
+void prepare_output_file(const std::string& path);
+// The same for an output folder: created when missing, then probed.
+void prepare_output_folder(const std::string& dir);
+
 // The most read_file reads (tinygltf takes sizes as 32 bits; a .glb cannot be larger).
 constexpr uint64_t kMaxInputFileBytes = 0xffffffffu;
 

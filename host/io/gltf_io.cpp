@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <cctype>
 #include <filesystem>
 #include <map>
 #include <set>
@@ -139,6 +140,11 @@ GltfFile load_gltf(const std::string& path, const RefPolicy& refs) {
   } else {
     std::string ext = extension_of(path);
     if (ext == ".glb") throw InputError(path, "not a glTF binary (wrong magic, expected 'glTF')");
+    // Not JSON at all (an .obj, an image): say what is expected, not the parser's message.
+    size_t first = 0;
+    while (first < bytes.size() && std::isspace(bytes[first])) ++first;
+    if (ext != ".gltf" && (first == bytes.size() || bytes[first] != '{'))
+      throw InputError(path, "not a glTF file (.gltf or .glb)");
     ok = loader.LoadASCIIFromString(&file.model, &err, &warn, reinterpret_cast<const char*>(bytes.data()),
                                     unsigned(bytes.size()), base_dir);
   }

@@ -178,7 +178,9 @@ OpenRef open_ref(const std::string& asset_path, const ExternalRef& ref, const Re
     try {
       return RegularFile(target, asset_path);
     } catch (const InputError& e) {
-      throw fail(e.what());
+      const std::string why = e.what();
+      // A missing file: say where it was looked for.
+      throw fail(why == "not found" ? "not found (looked for " + target.string() + ")" : why);
     }
   }();
   // Sizes before reading: a file much larger than declared is never read whole.

@@ -151,3 +151,65 @@ TEST_CASE("CLI: reparam's summary line says when the density cap kept it under -
   REQUIRE(k.exit_code == 0);
   CHECK_THAT(k.out, !Catch::Contains("capped"));
 }
+
+TEST_CASE("CLI: output folders are created, an unwritable output fails before the work and leaves nothing", "[cli]") {
+  test::Scratch dir("cli-outputs");
+  const auto good = quoted(dir / "good.glb");
+  io::save_gltf(pipeline::make_demo_asset({8, 32}), (dir / "good.glb").string());
+  std::ofstream(dir / "afile") << "x";  // a folder cannot be made here: afile/... fails
+  std::ofstream(dir / "manifest.txt") << "good.glb\n";
+
+  // A missing folder is created, by every command that writes (one rule).
+  auto r = run_uvpress("copy " + good + " -o " + quoted(dir / "new" / "sub" / "out.glb"));
+  INFO(r.err);
+  CHECK(r.exit_code == 0);
+  CHECK(test::fs::exists(dir / "new" / "sub" / "out.glb"));
+  r = run_uvpress("flatten " + good + " -o " + quoted(dir / "flat" / "f.glb") + " --report " + quoted(dir / "rep" / "f.json"));
+  INFO(r.err);
+  CHECK(r.exit_code == 0);
+  CHECK(test::fs::exists(dir / "flat" / "f.glb"));
+  CHECK(test::fs::exists(dir / "rep" / "f.json"));
+
+  // An output that cannot be written: one line naming it, exit 1, and no asset left behind
+  // (before the fix, the asset was written and then the report failed).
+  const auto blocked = dir / "afile" / "r.json";
+  const std::string why = "cannot create the output folder";
+  const auto out = quoted(dir / "out.glb");
+  test::check_input_error(dir, "copy " + good + " -o " + out + " --report " + quoted(blocked), blocked, why);
+  test::check_input_error(dir, "reparam " + good + " --no-optimize -o " + out + " --report " + quoted(blocked), blocked, why);
+  test::check_input_error(dir, "reparam " + good + " -o " + quoted(dir / "afile" / "x.glb"), dir / "afile" / "x.glb", why);
+  test::check_input_error(dir, "flatten " + good + " -o " + out + " --report " + quoted(blocked), blocked, why);
+  test::check_input_error(dir, "info " + good + " --report " + quoted(blocked), blocked, why);
+  test::check_input_error(dir, "eval " + good + " --html " + quoted(dir / "afile" / "html"), dir / "afile" / "html", why);
+  test::check_input_error(dir, "batch --manifest " + quoted(dir / "manifest.txt") + " -o " + quoted(dir / "afile" / "b"),
+                          dir / "afile" / "b", why);
+  test::check_input_error(dir, "demo -o " + quoted(dir / "afile"), dir / "afile", "not a folder");
+}
+
+TEST_CASE("CLI: messages: a non-glTF input, the subcommand's help, usage errors exit 2, a missing .bin's path", "[cli]") {
+  test::Scratch dir("cli-messages");
+  std::ofstream(dir / "mesh.obj") << "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+  const auto obj = quoted(dir / "mesh.obj");
+  test::check_input_error(dir, "info " + obj, dir / "mesh.obj", "not a glTF file (.gltf or .glb)");
+  test::check_input_error(dir, "reparam " + obj + " -o " + quoted(dir / "out.glb"), dir / "mesh.obj",
+                          "not a glTF file (.gltf or .glb)");
+
+  auto r = run_uvpress("reparam x.glb -o y.glb --size 3");
+  CHECK(r.exit_code == 2);
+  CHECK_THAT(r.err, Catch::Contains("(see uvpress reparam --help)"));
+  r = run_uvpress("eval x.glb --cost-grid 0,2");
+  CHECK(r.exit_code == 2);
+  CHECK_THAT(r.err, Catch::Contains("(see uvpress eval --help)"));
+  CHECK_THAT(run_uvpress("eval --help").out, Catch::Contains("(0, 4]"));
+  r = run_uvpress("batch --manifest m.txt -o d --size 256 --max-gmsd 0.01");
+  CHECK(r.exit_code == 2);
+  CHECK_THAT(r.err, Catch::Contains("(see uvpress batch --help)"));
+
+  // A missing .bin: the line says where it was looked for.
+  test::fs::create_directories(dir / "t");
+  io::save_gltf(pipeline::make_demo_asset({8, 32}), (dir / "t" / "a.gltf").string());
+  REQUIRE(test::fs::remove(dir / "t" / "a.bin"));
+  r = run_uvpress("info " + quoted(dir / "t" / "a.gltf"));
+  CHECK(r.exit_code == 1);
+  CHECK_THAT(r.err, Catch::Contains(test::fs::weakly_canonical(dir / "t").string() + "/a.bin"));
+}

@@ -174,3 +174,37 @@ TEST_CASE("flatten CLI: the same output bits with 1 and 2 threads (60K triangles
   const bool identical = slurp(dir / "t1.obj") == slurp(dir / "t2.obj");
   CHECK(identical);
 }
+
+// Real charts have holes (Fox 3 boundary loops, Duck 6, CesiumMilkTruck) or a non-manifold
+// vertex (BoxTextured): holes are filled for the solve, a chart that still is no disk is
+// skipped with a warning naming it, and the run exits 0 with zero flips.
+TEST_CASE("flatten CLI: glTF charts with holes flatten, a chart that cannot is skipped and named", "[flatten][cli][shared]") {
+  auto shared = test::shared_dir();
+  if (!shared) UVPRESS_SKIP("no ../shared: the Fox, Duck, CesiumMilkTruck and BoxTextured glTFs are not here");
+  test::Scratch dir("flatten-holes");
+  for (const char* name : {"Fox", "Duck", "CesiumMilkTruck", "BoxTextured"}) {
+    const auto input = *shared / "assets" / name / "glTF" / (std::string(name) + ".gltf");
+    if (!test::fs::exists(input)) {
+      WARN("skipped: " << input << " is not there");
+      continue;
+    }
+    const auto out = dir / (std::string(name) + ".glb"), report = dir / (std::string(name) + ".json");
+    auto r = run_uvpress("flatten " + quoted(input) + " -o " + quoted(out) + " --report " + quoted(report));
+    INFO(name << "\nstdout: " << r.out << "\nstderr: " << r.err);
+    REQUIRE(r.exit_code == 0);
+    CHECK_THAT(r.out, Catch::Contains(" 0 flips") && Catch::Contains("new UV set TEXCOORD_"));
+    CHECK_THAT(r.out, !Catch::Contains("eta") && !Catch::Contains("E_c"));  // solver jargon stays in --report
+    for (const auto& line : r.err_lines())
+      CHECK_THAT(line, Catch::Matches(".*: warning: mesh [0-9]+ primitive [0-9]+ chart [0-9]+: skipped: .*"));
+    auto j = nlohmann::json::parse(slurp(report));
+    CHECK(j["flips"] == 0);
+    CHECK(j["charts_skipped"].get<size_t>() == r.err_lines().size());
+    auto file = io::load_gltf(out.string());
+    for (const auto& set : j["uv_sets_written"]) {
+      size_t users = 0;
+      for (const auto& mesh : file.model.meshes)
+        for (const auto& prim : mesh.primitives) users += prim.attributes.count(set.get<std::string>());
+      CHECK(users > 0);
+    }
+  }
+}

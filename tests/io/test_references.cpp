@@ -77,7 +77,9 @@ TEST_CASE("open_ref: inside the asset's folder, regular, within its size, or one
   CHECK_THAT(open(image("nothere/../../secret.txt")), Catch::Contains(outside));
   CHECK(open(image("link.png"), true).empty());  // --allow-outside-refs
 
-  CHECK(open(image("gone.png")) == "image 3: 'gone.png' not found");
+  // A missing file says where it was looked for (the asset's folder).
+  CHECK(open(image("gone.png")) == "image 3: 'gone.png' not found (looked for " +
+                                       (test::fs::canonical(dir / "up") / "gone.png").string() + ")");
   CHECK(open(image("sub")) == "image 3: 'sub' is a folder, not a regular file");
   CHECK(open(image("fifo.bin")) == "image 3: 'fifo.bin' is a FIFO, not a regular file");
   CHECK(open(image("/dev/null"), true) == "image 3: '/dev/null' is a device, not a regular file");

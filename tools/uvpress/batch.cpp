@@ -76,12 +76,13 @@ void add_batch(CLI::App& app, Globals& g) {
   auto* cost = cmd->add_option("--cost", o.reparam.cost, "Texels of the new textures relative to the old (0.5: half)")
                    ->capture_default_str()
                    ->check(CLI::Range(0.001, 1.0));
-  cmd->add_option("--size", o.reparam.size, "New size of the driving texture's longer side, instead of --cost")
-      ->check(CLI::Range(8u, 16384u))
-      ->excludes(cost);
+  auto* size = cmd->add_option("--size", o.reparam.size, "New size of the driving texture's longer side, instead of --cost")
+                   ->check(CLI::Range(8u, 16384u))
+                   ->excludes(cost);
   cmd->add_option("--max-gmsd", o.reparam.max_gmsd, "Instead of --cost: the smallest textures whose 20-view GMSD is at most Q")
       ->check(CLI::Range(1e-5, 0.5))
-      ->excludes(cost);
+      ->excludes(cost)
+      ->excludes(size);
   cmd->add_flag("--pot", o.reparam.power_of_two, "Power-of-two texture sizes");
   cmd->add_option("--gutter", o.reparam.gutter, "Texels between charts and at the edge")->capture_default_str()->check(CLI::Range(0u, 64u));
   cmd->add_option("--block-align", o.reparam.block, "Align charts to N x N blocks (4 for BCn)")->check(CLI::IsMember({1u, 4u}));
@@ -93,7 +94,9 @@ void add_batch(CLI::App& app, Globals& g) {
   cmd->add_flag("--no-optimize", a->no_optimize, "Keep every triangle's shape: only repack and re-bake");
   cmd->add_flag("--eval", o.eval, "Also evaluate each result against its input (NAME.eval.json)");
   cmd->add_option("--eval-resolution", o.eval_options.resolution, "eval: view images, pixels a side")->capture_default_str()->check(CLI::Range(8u, 1024u));
-  cmd->add_option("--eval-cost-grid", a->grid, "eval: relative costs, comma-separated")->delimiter(',');
+  cmd->add_option("--eval-cost-grid", a->grid, "eval: relative costs, each in (0, 4], comma-separated")
+      ->delimiter(',')
+      ->check(cost_grid_value());
   cmd->add_option("--shard-index", a->shard_index, "This shard (default: SLURM_ARRAY_TASK_ID, JOB_COMPLETION_INDEX, AWS_BATCH_JOB_ARRAY_INDEX)");
   cmd->add_option("--shard-count", a->shard_count, "Number of shards (default: SLURM_ARRAY_TASK_COUNT, else one asset per index)")
       ->check(CLI::Range(size_t(1), size_t(1) << 40));
@@ -108,6 +111,7 @@ void add_batch(CLI::App& app, Globals& g) {
       o.refs = g.refs();  // the global --allow-outside-refs, recorded in every report
       if (!a->grid.empty()) o.eval_options.cost_grid = a->grid;
       if (a->collect) {
+        g.prepare_outputs({});  // --report; DIR is read, not written
         auto summary = pipeline::collect_batch(o);
         print_table(summary);
         g.write_report(summary);
@@ -127,6 +131,7 @@ void add_batch(CLI::App& app, Globals& g) {
       } catch (const std::invalid_argument& e) {
         throw UsageError(e.what());
       }
+      g.prepare_outputs({}, {o.output_dir});
       const std::string device = g.device;
       const bool validation = g.validation, verbose = g.verbose;
       auto factory = [device, validation, verbose](unsigned threads) {

@@ -27,6 +27,9 @@ struct Globals {
   std::unique_ptr<engine::Engine> make_engine() const;
   // What an input's buffer and image URIs may name (every load_gltf takes it).
   io::RefPolicy refs() const { return {allow_outside_refs}; }
+  // Before any work: every output file (and --report) and output folder created-for and
+  // checked writable (io::prepare_output_file / prepare_output_folder). Throws InputError.
+  void prepare_outputs(const std::vector<std::string>& files, const std::vector<std::string>& folders = {}) const;
   // Writes `report` atomically when --report was given.
   void write_report(const nlohmann::ordered_json& report) const;
   // "-v" stage timing: prints "stage: 12.3 ms" (the time since `since`) on stderr and
@@ -42,6 +45,9 @@ void add_bench(CLI::App& app, Globals& g);
 void add_flatten(CLI::App& app, Globals& g);
 void add_eval(CLI::App& app, Globals& g);
 void add_batch(CLI::App& app, Globals& g);
+
+// Checks one --cost-grid value: a number in (0, 4] (usage error otherwise).
+CLI::Validator cost_grid_value();
 
 // "1.2 MB"-style size for summary lines.
 std::string human_bytes(uint64_t bytes);

@@ -21,6 +21,7 @@ void add_copy(CLI::App& app, Globals& g) {
       auto t0 = std::chrono::steady_clock::now();
       if (!io::is_gltf_output_path(*output))
         throw InputError(*output, "unsupported output format (use .gltf or .glb)");
+      g.prepare_outputs({*output});
       io::GltfFile file = io::load_gltf(*input, g.refs());
       io::build_asset(file);  // reject what later stages could not read
       g.stage("load", t0);

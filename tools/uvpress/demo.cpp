@@ -25,7 +25,7 @@ void add_demo(CLI::App& app, Globals& g) {
     g.action = [&g, dir, evaluations] {
       namespace fs = std::filesystem;
       auto t0 = std::chrono::steady_clock::now();
-      fs::create_directories(*dir);
+      g.prepare_outputs({}, {*dir});
       const std::string input = (fs::path(*dir) / "demo.glb").string();
       const std::string output = (fs::path(*dir) / "demo-reparam.glb").string();
       io::save_gltf(pipeline::make_demo_asset(), input);

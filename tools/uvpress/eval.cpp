@@ -14,6 +14,16 @@
 
 namespace uvpress::cli {
 
+CLI::Validator cost_grid_value() {
+  return CLI::Validator(
+      [](std::string& s) -> std::string {
+        double c = 0;
+        if (!CLI::detail::lexical_cast(s, c) || !(c > 0 && c <= 4)) return "cost grid value " + s + " is not in (0, 4]";
+        return "";
+      },
+      "in (0, 4]");
+}
+
 void add_eval(CLI::App& app, Globals& g) {
   auto* cmd = app.add_subcommand("eval", "Quality (mean GMSD over 20 views) against pixel cost for several UV layouts");
   struct Args {
@@ -30,14 +40,16 @@ void add_eval(CLI::App& app, Globals& g) {
       ->required();
   cmd->add_option("others", a->others, "Other glTF files of the same mesh (reparam output, xatlas, Blender ...)");
   cmd->add_flag("--flatten", a->flatten, "Also evaluate the isometric layout (charts flattened, packed, re-baked)");
-  cmd->add_option("--cost-grid", a->grid, "Relative costs c_r, comma-separated (default 0.1,0.2,...,1.0)")
-      ->delimiter(',');
+  cmd->add_option("--cost-grid", a->grid, "Relative costs c_r, each in (0, 4], comma-separated (default 0.1,0.2,...,1.0)")
+      ->delimiter(',')
+      ->check(cost_grid_value());
   cmd->add_option("--resolution", a->resolution, "View images, pixels a side")->capture_default_str()->check(CLI::Range(8u, 1024u));
   cmd->add_option("--contact-cost", a->contact, "c_r of the contact sheet (default: the grid point nearest 0.25)");
   cmd->add_option("--html", a->html, "Write an offline HTML report into this folder");
   cmd->callback([&g, a] {
     g.action = [&g, a] {
       auto t0 = std::chrono::steady_clock::now();
+      g.prepare_outputs({}, {a->html});
       io::GltfFile ref = io::load_gltf(a->reference, g.refs());
       std::vector<io::GltfFile> files;
       files.reserve(a->others.size());

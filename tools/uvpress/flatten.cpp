@@ -10,6 +10,7 @@
 
 #include "atlas/charts.h"
 #include "core/error.h"
+#include "flatten/disk_topology.h"
 #include "flatten/flatten.h"
 #include "flatten/report.h"
 #include "io/asset.h"
@@ -32,6 +33,8 @@ struct Chart {
   std::string label;
   Mesh mesh;                         // positions + triangles of the chart
   flatten::Result result;
+  size_t filled_holes = 0;           // boundary loops closed virtually for the solve
+  std::string skipped;               // why the chart kept its input UVs ("" when flattened)
 };
 
 // Uniformly scales and translates 2-D points (2 per vertex) into [0,1]^2.
@@ -88,7 +91,8 @@ PrimitiveCharts split_primitive(const io::Primitive& prim) {
 }
 
 void flatten_gltf(const Globals& g, const std::string& input, const std::string& output, const flatten::Options& o,
-                  std::vector<Chart>& charts, std::chrono::steady_clock::time_point& t0) {
+                  std::vector<Chart>& charts, std::vector<std::string>& uv_sets,
+                  std::chrono::steady_clock::time_point& t0) {
   io::GltfFile file = io::load_gltf(input, g.refs());
   io::Asset asset = io::build_asset(file);
   g.stage("load", t0);
@@ -123,7 +127,32 @@ void flatten_gltf(const Globals& g, const std::string& input, const std::string&
           chart.mesh.triangles.push_back(local[u]);
         }
       }
-      chart.result = run_chart(chart.mesh, o, input, chart.label + ": ");
+      // Holes filled virtually (fan to a temporary centroid vertex per extra boundary loop),
+      // dropped after the solve. A chart that still cannot be flattened (non-manifold, a
+      // handle, a degenerate Tutte embedding) keeps its input UVs, scaled into its shelf,
+      // with a warning naming it.
+      try {
+        const flatten::FilledHoles filled = flatten::fill_holes(chart.mesh.positions, chart.mesh.triangles);
+        Mesh closed;
+        closed.positions = filled.positions;
+        closed.triangles = filled.triangles;
+        chart.result = flatten::flatten(closed, o);
+        chart.filled_holes = filled.filled_loops;
+      } catch (const flatten::FlattenError& e) {
+        chart.skipped = e.what();
+        chart.result = flatten::Result();
+        chart.result.uv.resize(2 * back.size());
+        for (size_t i = 0; i < back.size(); ++i)
+          for (int d = 0; d < 2; ++d) chart.result.uv[2 * i + size_t(d)] = pc.welded.uvs[2 * size_t(back[i]) + size_t(d)];
+        std::fprintf(stderr, "uvpress: %s: warning: %s: skipped: %s (input UVs kept)\n", input.c_str(),
+                     chart.label.c_str(), e.what());
+      }
+      if (chart.skipped.empty()) {
+        // A failed solve on a disk is a failure, not a skip: exit 1, nothing written.
+        if (std::string why = flatten::invalid_reason(chart.result); !why.empty())
+          throw InputError(input, chart.label + ": " + why);
+        chart.result.uv.resize(2 * chart.mesh.vertex_count());  // the temporary vertices go
+      }
       placed.push_back({p, std::move(back), charts.size()});
       charts.push_back(std::move(chart));
     }
@@ -198,13 +227,17 @@ void flatten_gltf(const Globals& g, const std::string& input, const std::string&
       for (size_t i = 0; i < pl.welded_uv_vertex.size(); ++i)
         for (int d = 0; d < 2; ++d)
           written[2 * i + size_t(d)] = double(float(welded_uv[p][2 * size_t(pl.welded_uv_vertex[i]) + size_t(d)]));
-      charts[pl.chart].result.flips = flatten::count_flips(charts[pl.chart].mesh.triangles, written);
+      // A skipped chart's own UVs are what they were: not this tool's flips.
+      if (charts[pl.chart].skipped.empty())
+        charts[pl.chart].result.flips = flatten::count_flips(charts[pl.chart].mesh.triangles, written);
     }
     const int accessor = io::append_float_accessor(model, uv, TINYGLTF_TYPE_VEC2);
     auto& attributes = model.meshes[size_t(prim.mesh)].primitives[size_t(prim.primitive)].attributes;
     int n = 0;
     while (attributes.count("TEXCOORD_" + std::to_string(n))) ++n;
     attributes["TEXCOORD_" + std::to_string(n)] = accessor;
+    if (std::find(uv_sets.begin(), uv_sets.end(), "TEXCOORD_" + std::to_string(n)) == uv_sets.end())
+      uv_sets.push_back("TEXCOORD_" + std::to_string(n));
   }
   size_t flips = 0;
   for (const auto& c : charts) flips += c.result.flips;
@@ -274,6 +307,7 @@ void add_flatten(CLI::App& app, Globals& g) {
       const std::string log_ext = io::extension_of(a->log);
       if (!a->log.empty() && log_ext != ".csv" && log_ext != ".json")
         throw InputError(a->log, "--log must name a .csv or .json file");
+      g.prepare_outputs({a->output, a->log});
 
       flatten::Options o;
       o.method = *flatten::parse_method(a->method);
@@ -288,7 +322,8 @@ void add_flatten(CLI::App& app, Globals& g) {
         };
       flatten::reset_peak_rss();
       std::vector<Chart> charts;
-      if (gltf_in) flatten_gltf(g, a->input, a->output, o, charts, t0);
+      std::vector<std::string> uv_sets;  // glTF: the TEXCOORD sets written
+      if (gltf_in) flatten_gltf(g, a->input, a->output, o, charts, uv_sets, t0);
       else flatten_mesh(g, a->input, a->output, o, charts, t0);
 
       if (!a->log.empty()) {
@@ -305,8 +340,14 @@ void add_flatten(CLI::App& app, Globals& g) {
       double seconds = 0, energy = 0, area = 0;
       int iterations = 0, most = 0, eta = 0;
       bool converged = true;
+      size_t skipped = 0, filled = 0;
       for (const auto& c : charts) {
         faces += c.mesh.triangle_count(), vertices += c.mesh.vertex_count(), flips += c.result.flips;
+        filled += c.filled_holes;
+        if (!c.skipped.empty()) {
+          ++skipped;
+          continue;
+        }
         seconds += c.result.seconds, iterations += c.result.iterations;
         most = std::max(most, c.result.iterations), eta = std::max(eta, c.result.eta);
         converged = converged && c.result.converged;
@@ -324,7 +365,7 @@ void add_flatten(CLI::App& app, Globals& g) {
         energy += a3 * c.result.energy, area += a3;
       }
       nlohmann::ordered_json report;
-      if (charts.size() == 1) {
+      if (charts.size() == 1 && skipped == 0 && filled == 0) {
         report = flatten::summary_json(charts[0].result, o.method, faces, vertices);
       } else {
         report["method"] = a->method;
@@ -342,15 +383,30 @@ void add_flatten(CLI::App& app, Globals& g) {
         for (const auto& c : charts) {
           auto j = flatten::summary_json(c.result, o.method, c.mesh.triangle_count(), c.mesh.vertex_count());
           j["chart"] = c.label;
+          if (c.filled_holes) j["filled_holes"] = c.filled_holes;
+          if (!c.skipped.empty()) j["skipped"] = c.skipped;
           report["charts"].push_back(j);
         }
       }
       report["input"] = a->input;
       report["output"] = a->output;
-      std::printf("%s: %zu triangles%s, %s: %d iterations (eta %d), E_c %.6f, %.3f s, %zu flips -> %s\n",
-                  a->input.c_str(), faces, charts.size() > 1 ? (" in " + std::to_string(charts.size()) + " charts").c_str() : "",
-                  a->method.c_str(), charts.size() == 1 ? iterations : most, eta,
-                  report["E_c"].get<double>(), seconds, flips, a->output.c_str());
+      if (gltf_in) {
+        report["uv_sets_written"] = uv_sets;
+        report["charts_skipped"] = skipped;
+        report["holes_filled"] = filled;
+      }
+      // What a person reads: triangles, charts, time, flips, what was skipped and the UV
+      // set written. The solver's own figures (eta, E_c) are in --report and -v.
+      std::string extra;
+      if (skipped) extra += ", " + std::to_string(skipped) + (skipped == 1 ? " chart" : " charts") + " skipped (input UVs kept)";
+      if (filled) extra += ", " + std::to_string(filled) + (filled == 1 ? " hole" : " holes") + " filled for the solve";
+      std::string sets;
+      for (const auto& s : uv_sets) sets += (sets.empty() ? "" : ", ") + s;
+      if (!sets.empty()) sets = " (new UV set " + sets + ")";
+      std::printf("%s: %zu triangles%s, %s: %d iterations, %.3f s, %zu flips%s -> %s%s\n", a->input.c_str(), faces,
+                  charts.size() > 1 ? (" in " + std::to_string(charts.size()) + " charts").c_str() : "", a->method.c_str(),
+                  charts.size() == 1 ? iterations : most, seconds, flips, extra.c_str(), a->output.c_str(), sets.c_str());
+      if (g.verbose) std::fprintf(stderr, "flatten: eta %d, E_c %.6f\n", eta, report["E_c"].get<double>());
       g.write_report(report);
       return 0;
     };

@@ -16,6 +16,7 @@ void add_info(CLI::App& app, Globals& g) {
   cmd->callback([&g, input] {
     g.action = [&g, input] {
       auto t0 = std::chrono::steady_clock::now();
+      g.prepare_outputs({});  // --report
       io::GltfFile file = io::load_gltf(*input, g.refs());
       g.stage("load", t0);
       auto info = pipeline::inspect(file);

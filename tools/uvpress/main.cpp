@@ -24,6 +24,14 @@ std::unique_ptr<engine::Engine> Globals::make_engine() const {
   return e;
 }
 
+void Globals::prepare_outputs(const std::vector<std::string>& files, const std::vector<std::string>& folders) const {
+  if (!report.empty()) io::prepare_output_file(report);
+  for (const auto& f : files)
+    if (!f.empty()) io::prepare_output_file(f);
+  for (const auto& d : folders)
+    if (!d.empty()) io::prepare_output_folder(d);
+}
+
 void Globals::write_report(const nlohmann::ordered_json& report) const {
   if (report.empty() || this->report.empty()) return;
   io::AtomicWriter writer;
@@ -90,7 +98,15 @@ int main(int argc, char** argv) {
   } catch (const CLI::CallForVersion& e) {
     return app.exit(e);
   } catch (const CLI::ParseError& e) {
-    std::fprintf(stderr, "uvpress: %s (see uvpress --help)\n", e.what());
+    // The hint names the help of the subcommand the error is in ("uvpress reparam --help").
+    std::string hint;
+    for (CLI::App* at = &app;;) {
+      auto subs = at->get_subcommands();
+      if (subs.empty()) break;
+      at = subs.back();
+      hint += " " + at->get_name();
+    }
+    std::fprintf(stderr, "uvpress: %s (see uvpress%s --help)\n", e.what(), hint.c_str());
     return 2;
   }
   try {

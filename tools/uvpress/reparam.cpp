@@ -83,6 +83,7 @@ void add_reparam(CLI::App& app, Globals& g) {
     g.action = [&g, input, output, o, no_optimize] {
       auto t0 = std::chrono::steady_clock::now();
       if (!io::is_gltf_output_path(*output)) throw InputError(*output, "unsupported output format (use .gltf or .glb)");
+      g.prepare_outputs({*output});  // before the work, not after it
       io::GltfFile file = io::load_gltf(*input, g.refs());
       auto engine = g.make_engine();
       pipeline::ReparamOptions options = *o;
