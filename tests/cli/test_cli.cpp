@@ -21,6 +21,11 @@ std::string quoted(const test::fs::path& p) { return "'" + p.string() + "'"; }
 }  // namespace
 
 TEST_CASE("CLI: --version, --help and usage errors", "[cli]") {
+  for (const char* sub : {"reparam", "eval", "flatten", "batch"}) {  // subcommand help names the global options
+    auto h = run_uvpress(std::string(sub) + " --help");
+    CHECK(h.exit_code == 0);
+    CHECK_THAT(h.out, Catch::Contains("--report FILE.json") && Catch::Contains("--device"));
+  }
   auto v = run_uvpress("--version");
   CHECK(v.exit_code == 0);
   CHECK_THAT(v.out, Catch::StartsWith("uvpress "));

@@ -88,6 +88,11 @@ int main(int argc, char** argv) {
   cli::add_flatten(app, g);
   cli::add_eval(app, g);
   cli::add_batch(app, g);
+  // Global options are parsed before or after the subcommand but listed only by
+  // `uvpress --help`: every subcommand's help names them too.
+  for (CLI::App* sub : app.get_subcommands({}))
+    sub->footer("Global options (before or after the command): -v/--verbose, --report FILE.json, "
+                "--device auto|gpu|lavapipe|cpu, --vulkan-validation, --allow-outside-refs (see uvpress --help)");
 
   try {
     app.parse(argc, argv);

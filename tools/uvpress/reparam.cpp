@@ -72,7 +72,7 @@ void add_reparam(CLI::App& app, Globals& g) {
       ->excludes(size);
   cmd->add_flag("--pot", o->power_of_two, "Power-of-two texture sizes");
   cmd->add_option("--gutter", o->gutter, "Texels between charts and at the edge")->capture_default_str()->check(CLI::Range(0u, 64u));
-  cmd->add_option("--block-align", o->block, "Align charts to N x N blocks (4 for BCn)")->check(CLI::IsMember({1u, 4u}));
+  cmd->add_option("--block-align", o->block, "Align charts to N x N blocks (4 for BCn)")->capture_default_str()->check(CLI::IsMember({1u, 4u}));
   cmd->add_option("--epsilon", o->triangle.epsilon, "GMSD bound per triangle view (eq. 12)")->capture_default_str()->check(CLI::Range(1e-4, 0.5));
   cmd->add_option("--evaluations", o->triangle.evaluations, "GP-BO evaluations per triangle")->capture_default_str()->check(CLI::Range(11, 1000));
   cmd->add_option("--view-size", o->triangle.view_size, "Per-triangle view size in pixels")->capture_default_str()->check(CLI::IsMember({16u, 32u, 48u, 64u}));
