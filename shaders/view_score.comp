@@ -33,11 +33,7 @@ const uint kSlot = OFF_DIAG + kTexels;
 const float kFixedPoint = 65536.0, kSmoothness = 1e-4, kTolerance = 1e-5;
 const uint kMaxIterations = 200u;
 
-// The candidate's scratch slot and its view's reference and coverage within the page,
-// from built-ins and push constants.
-#define g_slot (gl_WorkGroupID.x * kSlot)
-#define g_ref_base ((candidates[p.first + gl_WorkGroupID.x].view - p.view_base) * p.size * p.size)
-#define g_cov_base (g_ref_base / 4u)
+uint g_slot, g_ref_base, g_cov_base;
 
 float sf(uint off) { return uintBitsToFloat(scratch[g_slot + off]); }
 void set_sf(uint off, float v) { scratch[g_slot + off] = floatBitsToUint(v); }
@@ -70,8 +66,6 @@ float unordered(uint u) { return uintBitsToFloat((u & 0x80000000u) != 0u ? u & 0
 shared vec4 s_place[kViewMaxGroups];  // per group: ou, ov (lattice origin), x, y (place in the tile)
 shared int s_ref_sum;
 shared uint s_count, s_seen;
-shared float s_mean, s_lattice;
-shared uint s_tile_width;
 
 uint cover_at(uint pix) { return (coverage[g_cov_base + pix / 4u] >> (8u * (pix % 4u))) & 0xffu; }
 
@@ -108,6 +102,9 @@ void main() {
   ViewDesc view = views[c.view];
   int S = int(p.size);
   uint npix = uint(S * S);
+  g_slot = gl_WorkGroupID.x * kSlot;
+  g_ref_base = local_view * npix;
+  g_cov_base = local_view * npix / 4u;
   const uint G = clamp(view.group_count, 1u, kViewMaxGroups);
   for (uint k = tid; k < view.triangle_count; k += WG) {
     ViewTriangle t = triangles[view.first_triangle + k];
@@ -252,7 +249,6 @@ void main() {
   // nearly singular modes to the system.
   float count = float(s_count);
   float mean = s_count == 0u ? 0.0 : float(s_ref_sum) / (kFixedPoint * count);
-  if (tid == 0u) { s_mean = mean; s_lattice = 1.0 / inv; s_tile_width = uint(w); }
   float mu = kSmoothness * count / float(max(s_seen, 1u));
   const float inv_q = 1.0 / kFixedPoint;
   for (uint t = tid; t < n; t += WG) {
@@ -338,8 +334,7 @@ void main() {
   barrier();
 
   // 6. Bilinear render of the tile; empty pixels stay 0 as in the reference.
-  w = int(s_tile_width);
-  for (uint pix = gl_LocalInvocationIndex; pix < p.size * p.size; pix += WG) {
+  for (uint pix = tid; pix < npix; pix += WG) {
     float value = 0.0;
     if (cover_at(pix) != kNoTriangle) {
       float a = sf(OFF_U + pix), b = sf(OFF_V + pix);
@@ -352,7 +347,7 @@ void main() {
       bottom += fa * sf(OFF_X + t1 + 1u);
       precise float v = (1.0 - fb) * top;
       v += fb * bottom;
-      value = v + s_mean;  // CG solved for the tile minus the mean
+      value = v + mean;  // CG solved for the tile minus the mean
     }
     set_sf(OFF_CAND + pix, value);
   }
@@ -363,6 +358,6 @@ void main() {
   float g = gmsd_run(p.size, p.size);
   if (tid == 0u) {
     result[2u * cand_index] = g;
-    result[2u * cand_index + 1u] = s_lattice;
+    result[2u * cand_index + 1u] = 1.0 / inv;
   }
 }

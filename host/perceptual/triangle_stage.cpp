@@ -70,8 +70,9 @@ double acquisition(const Search& s, const double* x, double mean, double sd, con
   return ei / std::sqrt(M_PI);
 }
 
-void record(Search& s, const double x[4], double g, int evaluation, const TriangleStageOptions& o) {
-  if (evaluation == 1) s.identity_g = g;
+// `lattice`: the largest tile spacing over the triangle's views at this evaluation.
+void record(Search& s, const double x[4], double g, float lattice, int evaluation, const TriangleStageOptions& o) {
+  if (evaluation == 1) s.identity_g = g, s.identity_lattice = lattice;  // the first point is the identity
   s.bo->observe(x, std::log(std::max(double(g), 0.0) + kGmsdFloor));
   double f = objective(s, x, g, o);
   if (f < s.best_f) {
@@ -221,10 +222,8 @@ std::vector<TriangleResult> optimize_triangles(engine::Engine& engine, const Tri
       for (long i = 0; i < long(half.size()); ++i) {
         Search& s = searches[half[size_t(i)]];
         const uint32_t first = batch.start[size_t(i)];
-        const int evaluation = int(s.bo->evaluations()) + 1;
-        if (evaluation == 1)
-          s.identity_lattice = *std::max_element(batch.lattice.begin() + first, batch.lattice.begin() + first + s.views);
-        record(s, s.x, combine(&batch.scores[first], s.views), evaluation, o);
+        const float lattice = *std::max_element(batch.lattice.begin() + first, batch.lattice.begin() + first + s.views);
+        record(s, s.x, combine(&batch.scores[first], s.views), lattice, int(s.bo->evaluations()) + 1, o);
       }
     };
     auto score_async = [&](Batch& batch) {
