@@ -50,6 +50,10 @@ Synthetic synthetic() {
 // in columns 1-2 (detail) and column 6 (flat; column 5 borders the detail).
 std::vector<uint32_t> detailed() { return {2 * (8 + 1), 2 * (8 + 1) + 1, 2 * (16 + 2), 2 * (8 + 2) + 1}; }
 std::vector<uint32_t> flat() { return {2 * (8 + 6), 2 * (8 + 6) + 1, 2 * (16 + 6), 2 * (16 + 6) + 1}; }
+std::vector<uint32_t> detailed_then_flat() {
+  const std::vector<uint32_t> which = detailed_then_flat();
+  return which;
+}
 
 }  // namespace
 
@@ -58,8 +62,7 @@ TEST_CASE("Triangle stage: flat signal shrinks, detail keeps its size, every res
   auto engine = engine::make_cpu_engine({});
   perceptual::TriangleStageOptions o;
   o.evaluations = 60;
-  std::vector<uint32_t> which = detailed();
-  for (uint32_t t : flat()) which.push_back(t);
+  const std::vector<uint32_t> which = detailed_then_flat();
   auto r = perceptual::optimize_triangles(*engine, s.input(), s.texture, o, which);
   REQUIRE(r.size() == 8);
   for (size_t k = 0; k < r.size(); ++k) {
@@ -111,8 +114,7 @@ TEST_CASE("Triangle stage: a triangle with no feasible point is returned at the 
   auto engine = engine::make_cpu_engine({});
   perceptual::TriangleStageOptions o;
   o.evaluations = 20;
-  std::vector<uint32_t> which = detailed();
-  for (uint32_t t : flat()) which.push_back(t);
+  const std::vector<uint32_t> which = detailed_then_flat();
   // eps = 0: no loss is below it, not even the identity's.
   o.epsilon = 0;
   auto r = perceptual::optimize_triangles(*engine, s.input(), s.texture, o, which);
