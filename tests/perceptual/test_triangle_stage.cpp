@@ -51,7 +51,8 @@ Synthetic synthetic() {
 std::vector<uint32_t> detailed() { return {2 * (8 + 1), 2 * (8 + 1) + 1, 2 * (16 + 2), 2 * (8 + 2) + 1}; }
 std::vector<uint32_t> flat() { return {2 * (8 + 6), 2 * (8 + 6) + 1, 2 * (16 + 6), 2 * (16 + 6) + 1}; }
 std::vector<uint32_t> detailed_then_flat() {
-  const std::vector<uint32_t> which = detailed_then_flat();
+  std::vector<uint32_t> which = detailed();
+  for (uint32_t t : flat()) which.push_back(t);
   return which;
 }
 
