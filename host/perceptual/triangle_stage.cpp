@@ -8,6 +8,7 @@
 #include <future>
 #include <limits>
 #include <memory>
+#include <stdexcept>
 
 namespace uvpress::perceptual {
 
@@ -36,6 +37,7 @@ struct Search {
   uint32_t triangle = 0;
   uint32_t first_view = 0, views = 1;  // its views in the wave's view set
   double area = 0;  // |T| in texels
+  double eps = 0;   // its GMSD bound (eq. 12): options.epsilon, or its own under rate control
   std::unique_ptr<bo::BayesOpt> bo;
   double x[4] = {0, 0, 0, 0};  // pending proposal
   double best_f = std::numeric_limits<double>::infinity(), best_g = 0;
@@ -49,22 +51,22 @@ struct Search {
 double objective(const Search& s, const double x[4], double g, const TriangleStageOptions& o) {
   double l1, l2;
   jacobian_of(x, o.lambda_min, nullptr, &l1, &l2);
-  return l1 * l2 * s.area + barrier(g, o.epsilon);
+  return l1 * l2 * s.area + barrier(g, s.eps);
 }
 
 // Expected improvement of the composite objective under z ~ N(mean, sd^2).
 double acquisition(const Search& s, const double* x, double mean, double sd, const TriangleStageOptions& o) {
-  const double log_eps = std::log(o.epsilon + kGmsdFloor);
+  const double log_eps = std::log(s.eps + kGmsdFloor);
   if (!std::isfinite(s.best_f)) return bo::normal_cdf((log_eps - mean) / std::max(sd, 1e-12));
   double l1, l2;
   jacobian_of(x, o.lambda_min, nullptr, &l1, &l2);
   const double area = l1 * l2 * s.area;
-  if (area - std::log(o.epsilon) >= s.best_f) return 0;  // cannot improve even at GMSD = 0
+  if (area - std::log(s.eps) >= s.best_f) return 0;  // cannot improve even at GMSD = 0
   double ei = 0;
   for (int k = 0; k < 12; ++k) {
     double z = mean + sd * std::sqrt(2.0) * kHermiteNodes[k];
     double g = std::exp(z) - kGmsdFloor;
-    double f = area + barrier(std::max(g, 0.0), o.epsilon);
+    double f = area + barrier(std::max(g, 0.0), s.eps);
     if (f < s.best_f) ei += kHermiteWeights[k] * (s.best_f - f);
   }
   return ei / std::sqrt(M_PI);
@@ -162,6 +164,8 @@ std::vector<TriangleResult> optimize_triangles(engine::Engine& engine, const Tri
   std::vector<uint32_t> all = which;
   if (all.empty())
     for (uint32_t t = 0; t < input.triangle_count; ++t) all.push_back(t);
+  if (!o.epsilons.empty() && o.epsilons.size() < input.triangle_count)
+    throw std::invalid_argument("optimize_triangles: epsilons has fewer entries than the mesh has triangles");
   std::vector<TriangleResult> results(all.size());
   const bool overlap = o.overlap == TriangleStageOptions::Overlap::On ||
                        (o.overlap == TriangleStageOptions::Overlap::Auto && engine.device().type != "cpu");
@@ -183,6 +187,7 @@ std::vector<TriangleResult> optimize_triangles(engine::Engine& engine, const Tri
     for (size_t k = 0; k < wave.size(); ++k) {
       Search& s = searches[k];
       s.triangle = wave[k], s.area = texel_area(input, wave[k]);
+      s.eps = o.epsilons.empty() ? o.epsilon : o.epsilons[wave[k]];
       s.first_view = tv.first_view[k], s.views = tv.first_view[k + 1] - tv.first_view[k];
       bo::BoOptions bo_options;
       bo_options.dim = 4, bo_options.initial = o.initial;
@@ -190,6 +195,13 @@ std::vector<TriangleResult> optimize_triangles(engine::Engine& engine, const Tri
       s.bo = std::make_unique<bo::BayesOpt>(bo_options);
       const double identity[4] = {0, 1, 1, 0};
       s.bo->set_initial_point(0, identity);
+      if (o.start_scale > o.lambda_min && o.start_scale < 1 && o.initial > 1) {
+        // The uniform shrink a plain resize would apply: under rate control the bound is set
+        // just above its loss, so the search starts from a point known to be (nearly) feasible.
+        const double u = (o.start_scale - o.lambda_min) / (1 - o.lambda_min);
+        const double shrink[4] = {0, u, u, 0};
+        s.bo->set_initial_point(1, shrink);
+      }
     }
 
     // Lockstep rounds over two halves: while the engine scores one half, the host updates

@@ -30,6 +30,12 @@ struct TriangleStageOptions {
   uint32_t view_size = 64;     // S, pixels a view side (the paper's 64)
   uint32_t max_patches = 4;    // views of a triangle too large to resolve in one (triangle_view.h)
   double epsilon = 0.01;       // GMSD bound (eq. 12)
+  // Rate control: one bound per triangle of the mesh (indexed by triangle, overriding
+  // `epsilon` when not empty), e.g. a little above the loss a plain resize would cause.
+  std::vector<double> epsilons;
+  // When in (lambda_min, 1): the second initial point is J = start_scale I (the resize's
+  // uniform shrink), so the search holds a known point near its bound from the start.
+  double start_scale = 0;
   int evaluations = 100;       // per triangle, initial design included (the paper's budget)
   int initial = 10;
   // Leave the batch when the best objective stalls (>= 30 evaluations, 25 without a 0.1 %

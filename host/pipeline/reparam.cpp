@@ -49,9 +49,15 @@ struct Layout {
 struct TriangleCounts {
   size_t optimized = 0, feasible = 0, resolved = 0, sampled = 0, coarsened = 0;
   std::vector<double> infeasible_identity_gmsd, lambda_area;
+  std::vector<double> rate_epsilons;  // per triangle under rate control (empty: the fixed epsilon)
 
   json to_json(const perceptual::TriangleStageOptions& t) const {
-    json j = {{"epsilon", t.epsilon},
+    json eps = t.epsilon;
+    if (!rate_epsilons.empty())
+      eps = {{"rule", "rate control: max(margin * loss under the resize to the requested cost, floor)"},
+             {"quartiles", {quantile(rate_epsilons, 0.25), quantile(rate_epsilons, 0.5), quantile(rate_epsilons, 0.75)}},
+             {"max", quantile(rate_epsilons, 1.0)}};
+    json j = {{"epsilon", eps},
               {"evaluations", t.evaluations},
               {"early_stop", t.early_stop},
               {"view_size", t.view_size},
@@ -173,6 +179,12 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
     const std::string driver_name = file.path + ": image " + std::to_string(L.driver);
     Image driver = io::decode_image(file.image_bytes[size_t(L.driver)], driver_name);
     const double W = driver.width, H = driver.height;
+    // The uniform scale a plain resize to the requested cost applies (rate control's yardstick).
+    double rate_scale = 0;
+    if (o.optimize && o.rate_control && o.max_gmsd <= 0) {
+      const double c = o.size > 0 ? double(o.size) * o.size * std::min(W, H) / std::max(W, H) / (W * H) : o.cost;
+      rate_scale = std::sqrt(std::min(1.0, c));
+    }
     std::vector<float> luminance = perceptual::luminance_plane(driver);
 
     // Charts of every UV set, with the triangle stage's targets.
@@ -200,6 +212,18 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
         perceptual::TriangleViewInput in{prim.positions.data(), prim.vertex_count(), prim.indices.data(),
                                          prim.triangle_count(), uv.data(), driver.width, driver.height};
         perceptual::TriangleStageOptions topt = o.triangle;
+        if (rate_scale > 0) {
+          // Rate control: each triangle may lose at most a little more than the plain resize
+          // to the requested cost would make it lose (its loss at J = sqrt(c) I, measured on
+          // its own views), so the optimizer only ever trades texels where the resize would
+          // have spent them for nothing.
+          const double s0 = rate_scale;
+          std::vector<double> g = perceptual::measure_triangles(engine, in, luminance, topt, {s0, 0, 0, s0});
+          topt.epsilons.resize(g.size());
+          for (size_t t = 0; t < g.size(); ++t) topt.epsilons[t] = std::max(o.rate_margin * g[t], o.rate_floor);
+          topt.start_scale = s0;
+          tri.rate_epsilons.insert(tri.rate_epsilons.end(), topt.epsilons.begin(), topt.epsilons.end());
+        }
         if (progress) {
           const std::string stage = "triangles (layout " + std::to_string(li) + ")";
           topt.progress = [&progress, stage](size_t done, size_t total) { progress(stage, done, total); };
@@ -296,6 +320,47 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
       }
     t_mesh += seconds_since(t0);
 
+    // The packing scale may grow until the layout fills the budget, but no part of the
+    // surface should get more texels than the source has: the cap is the scale at which the
+    // densest triangles (area-weighted 98th percentile of the largest singular value of
+    // old -> new) reach the source density. A few outliers above it are only magnified.
+    double s_max = 1;
+    {
+      std::vector<std::pair<double, double>> sigma;  // (largest singular value, old area)
+      double total = 0;
+      for (const Chart& ch : charts)
+        for (size_t t = 0; t < ch.triangles.size(); ++t) {
+          const uint32_t* l = &ch.local[3 * t];
+          const double* a = &ch.uv[2 * l[0]];
+          const double* b = &ch.uv[2 * l[1]];
+          const double* c = &ch.uv[2 * l[2]];
+          const double* A = &ch.new_uv[2 * l[0]];
+          const double* B = &ch.new_uv[2 * l[1]];
+          const double* C = &ch.new_uv[2 * l[2]];
+          const double e[4] = {b[0] - a[0], c[0] - a[0], b[1] - a[1], c[1] - a[1]};  // old edges as columns
+          const double f[4] = {B[0] - A[0], C[0] - A[0], B[1] - A[1], C[1] - A[1]};  // new edges
+          const double det = e[0] * e[3] - e[1] * e[2];
+          if (!(std::abs(det) > 1e-12)) continue;
+          // M = F E^-1; sigma_max^2 = (|M|_F^2 + sqrt(|M|_F^4 - 4 det(M)^2)) / 2.
+          const double m[4] = {(f[0] * e[3] - f[1] * e[2]) / det, (-f[0] * e[1] + f[1] * e[0]) / det,
+                               (f[2] * e[3] - f[3] * e[2]) / det, (-f[2] * e[1] + f[3] * e[0]) / det};
+          const double fro = m[0] * m[0] + m[1] * m[1] + m[2] * m[2] + m[3] * m[3], dm = m[0] * m[3] - m[1] * m[2];
+          const double sm = std::sqrt(0.5 * (fro + std::sqrt(std::max(0.0, fro * fro - 4 * dm * dm))));
+          sigma.push_back({sm, 0.5 * std::abs(det)});
+          total += 0.5 * std::abs(det);
+        }
+      std::sort(sigma.begin(), sigma.end(), [](const auto& x, const auto& y) { return x.first > y.first; });
+      double above = 0;
+      for (const auto& [sm, area] : sigma) {
+        above += area;
+        if (above >= 0.02 * total) {
+          if (sm > 0) s_max = 1 / sm;
+          break;
+        }
+      }
+      s_max = std::clamp(s_max, 1.0, 1.0 / o.triangle.lambda_min);
+    }
+
     // Pack into the budget (eq. 20-21), never above the source texel density.
     t0 = Clock::now();
     std::vector<atlas::ChartShape> shapes(charts.size());
@@ -303,6 +368,7 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
     atlas::BudgetOptions budget;
     budget.cost = o.max_gmsd > 0 ? 1.0 : o.cost, budget.size = o.max_gmsd > 0 ? 0 : o.size;
     budget.pot = o.power_of_two;
+    budget.s_max = s_max;
     budget.measure = atlas::CostMeasure::ImageTexels;  // --cost is about texture memory
     budget.pack.gutter = o.gutter, budget.pack.block = o.block;
     atlas::AtlasChoice choice = atlas::choose_atlas(shapes, driver.width, driver.height, old_used, budget);
@@ -385,6 +451,8 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
     jl["rigid_charts"] = rigid;
     jl["atlas"] = {packing.width, packing.height};
     jl["scale"] = packing.scale;
+    jl["scale_cap"] = s_max;  // the source density of the densest triangles
+    jl["capped_at_source_density"] = packing.scale >= 0.999 * s_max;
     jl["packing_efficiency"] = packing.efficiency;
     jl["chart_cost_ratio"] = choice.cost_ratio;
     jl["flips"] = layout_flips;

@@ -28,6 +28,12 @@ struct ReparamOptions {
   // cost grid, and its re-baked textures are area-filtered down to the cheapest size that
   // meets the bound (gutters shrink with them). 0: off.
   double max_gmsd = 0;
+  // Rate control (with optimize, --cost or --size): each triangle's GMSD bound is
+  // max(rate_margin * its loss under the plain resize to the requested cost, rate_floor)
+  // instead of the fixed triangle.epsilon (which --epsilon restores).
+  bool rate_control = true;
+  double rate_margin = 1.25;
+  double rate_floor = 1e-4;
   perceptual::TriangleStageOptions triangle;
 };
 

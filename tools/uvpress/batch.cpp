@@ -86,7 +86,9 @@ void add_batch(CLI::App& app, Globals& g) {
   cmd->add_flag("--pot", o.reparam.power_of_two, "Power-of-two texture sizes");
   cmd->add_option("--gutter", o.reparam.gutter, "Texels between charts and at the edge")->capture_default_str()->check(CLI::Range(0u, 64u));
   cmd->add_option("--block-align", o.reparam.block, "Align charts to N x N blocks (4 for BCn)")->capture_default_str()->check(CLI::IsMember({1u, 4u}));
-  cmd->add_option("--epsilon", o.reparam.triangle.epsilon, "GMSD bound per triangle view (eq. 12)")->capture_default_str()->check(CLI::Range(1e-4, 0.5));
+  cmd->add_option("--epsilon", o.reparam.triangle.epsilon, "One GMSD bound for every triangle view (eq. 12; default: per triangle, from the loss a resize to the cost would cause)")
+      ->check(CLI::Range(1e-4, 0.5))
+      ->each([a](const std::string&) { a->o.reparam.rate_control = false; });
   cmd->add_option("--evaluations", o.reparam.triangle.evaluations, "GP-BO evaluations per triangle")->capture_default_str()->check(CLI::Range(11, 1000));
   cmd->add_option("--view-size", o.reparam.triangle.view_size, "Per-triangle view size in pixels")->capture_default_str()->check(CLI::IsMember({16u, 32u, 48u, 64u}));
   cmd->add_flag("--early-stop", o.reparam.triangle.early_stop, "Stop a triangle's search once it stalls");

@@ -73,7 +73,9 @@ void add_reparam(CLI::App& app, Globals& g) {
   cmd->add_flag("--pot", o->power_of_two, "Power-of-two texture sizes");
   cmd->add_option("--gutter", o->gutter, "Texels between charts and at the edge")->capture_default_str()->check(CLI::Range(0u, 64u));
   cmd->add_option("--block-align", o->block, "Align charts to N x N blocks (4 for BCn)")->capture_default_str()->check(CLI::IsMember({1u, 4u}));
-  cmd->add_option("--epsilon", o->triangle.epsilon, "GMSD bound per triangle view (eq. 12)")->capture_default_str()->check(CLI::Range(1e-4, 0.5));
+  cmd->add_option("--epsilon", o->triangle.epsilon, "One GMSD bound for every triangle view (eq. 12; default: per triangle, from the loss a resize to the cost would cause)")
+      ->check(CLI::Range(1e-4, 0.5))
+      ->each([o](const std::string&) { o->rate_control = false; });
   cmd->add_option("--evaluations", o->triangle.evaluations, "GP-BO evaluations per triangle")->capture_default_str()->check(CLI::Range(11, 1000));
   cmd->add_option("--view-size", o->triangle.view_size, "Per-triangle view size in pixels")->capture_default_str()->check(CLI::IsMember({16u, 32u, 48u, 64u}));
   cmd->add_option("--seed", o->triangle.seed, "Seed of the Bayesian optimization")->capture_default_str();
@@ -105,7 +107,7 @@ void add_reparam(CLI::App& app, Globals& g) {
       // the ratio is below --cost.
       std::string capped;
       bool at_density = false;
-      for (const auto& l : report["layouts"]) at_density |= l.contains("scale") && l["scale"].get<double>() >= 0.999;
+      for (const auto& l : report["layouts"]) at_density |= l.value("capped_at_source_density", false);
       if (o->size == 0 && o->max_gmsd == 0 && at_density && report["cost_ratio"].get<double>() < 0.98 * o->cost) {
         char text[96];
         std::snprintf(text, sizeof text, " (--cost %.3g: capped at the source texel density)", o->cost);
