@@ -3,9 +3,11 @@
 #include "atlas/charts.h"
 #include "atlas/pack.h"
 #include "atlas/rebake.h"
+#include "core/disjoint_sets.h"
 #include "core/error.h"
 #include "core/quantile.h"
 #include "eval/eval.h"
+#include "eval/resize.h"
 #include "io/asset.h"
 #include "io/gltf_append.h"
 #include "io/image_io.h"
@@ -128,6 +130,7 @@ struct Chart {
   std::vector<double> uv;             // input, texel units of the driver (2 per local vertex)
   std::vector<double> new_uv;         // after the mesh stage, same units
   bool rigid = false;                 // mixed orientation (folded / partly mirrored): not optimized
+  bool shared = false;                // shares source texels with another chart: moved with it, unreshaped
 };
 
 double signed_area(const double* a, const double* b, const double* c) {
@@ -143,11 +146,339 @@ bool has_tangents(const tinygltf::Model& m, const io::Primitive& p) {
   return m.meshes[size_t(p.mesh)].primitives[size_t(p.primitive)].attributes.count("TANGENT") > 0;
 }
 
+// One re-parameterized layout's input side, computed once: its charts and the triangle
+// stage's results, from which every candidate layout derives its targets.
+struct Prepared {
+  size_t index = 0;  // into the layouts
+  Image driver;
+  double W = 0, H = 0;
+  std::vector<Chart> charts;
+  std::vector<std::vector<uint32_t>> welded_of_vertex;  // per UV set: primitive vertex -> welded UV id
+  std::vector<size_t> welded_count;
+  std::vector<std::vector<perceptual::TriangleResult>> results;  // per UV set (empty without optimize)
+  double old_used = 0;  // eq. 20: source texels under the input's charts
+  size_t rigid = 0;
+  TriangleCounts tri;
+  // Packing units: charts that share source texels (mirrored halves, instanced parts, two
+  // meshes on one atlas region) are packed together, in their input arrangement, so the
+  // output keeps the saving the input already had.
+  std::vector<std::vector<uint32_t>> units;  // chart indices per unit
+  std::vector<uint32_t> unit_of_chart;
+  size_t shared_charts = 0;
+};
+
+// Groups the charts of `P` that cover a common source texel centre into packing units and
+// marks them `shared`. Texel centres, not conservative footprints: charts that merely touch
+// along a texel line do not share a texel.
+void find_shared_texels(Prepared& P) {
+  const int W = int(P.W), H = int(P.H);
+  std::vector<uint32_t> owner(size_t(W) * size_t(H), UINT32_MAX);
+  DisjointSets sets(P.charts.size());
+  for (uint32_t c = 0; c < P.charts.size(); ++c) {
+    const Chart& ch = P.charts[c];
+    for (size_t t = 0; t < ch.triangles.size(); ++t) {
+      const double* a = &ch.uv[2 * ch.local[3 * t]];
+      const double* b = &ch.uv[2 * ch.local[3 * t + 1]];
+      const double* d = &ch.uv[2 * ch.local[3 * t + 2]];
+      const double area = signed_area(a, b, d);
+      if (area == 0) continue;
+      const int x0 = std::max(0, int(std::floor(std::min({a[0], b[0], d[0]}) - 0.5)));
+      const int x1 = std::min(W - 1, int(std::ceil(std::max({a[0], b[0], d[0]}) - 0.5)));
+      const int y0 = std::max(0, int(std::floor(std::min({a[1], b[1], d[1]}) - 0.5)));
+      const int y1 = std::min(H - 1, int(std::ceil(std::max({a[1], b[1], d[1]}) - 0.5)));
+      for (int y = y0; y <= y1; ++y)
+        for (int x = x0; x <= x1; ++x) {
+          const double p[2] = {x + 0.5, y + 0.5};
+          const double w0 = signed_area(b, d, p) / area, w1 = signed_area(d, a, p) / area, w2 = signed_area(a, b, p) / area;
+          if (w0 < 0 || w1 < 0 || w2 < 0) continue;
+          uint32_t& o = owner[size_t(y) * size_t(W) + size_t(x)];
+          if (o == UINT32_MAX) o = c;
+          else if (o != c) sets.unite(o, c);
+        }
+    }
+  }
+  std::vector<uint32_t> unit_of_root(P.charts.size(), UINT32_MAX);
+  P.unit_of_chart.assign(P.charts.size(), 0);
+  P.units.clear();
+  for (uint32_t c = 0; c < P.charts.size(); ++c) {
+    uint32_t& u = unit_of_root[sets.find(c)];
+    if (u == UINT32_MAX) u = uint32_t(P.units.size()), P.units.emplace_back();
+    P.units[u].push_back(c);
+    P.unit_of_chart[c] = u;
+  }
+  P.shared_charts = 0;
+  for (const auto& unit : P.units)
+    if (unit.size() > 1)
+      for (uint32_t c : unit) P.charts[c].shared = true, ++P.shared_charts;
+}
+
+// A candidate layout: the triangle stage's targets with every stretch factor floored at
+// `floor` (the paper's targets at lambda_min; 1 would be a rigid copy), or no reshaping at
+// all (`repack`: the input's charts, only repacked). The most aggressive targets are not
+// always the best at a given cost (the mesh stage's compromise and the re-bake both lose
+// detail), so reparam builds a few and keeps the one that scores best on screen.
+struct Candidate {
+  std::string name;
+  bool reshape = true;
+  double floor = 0;
+};
+
+// What one candidate came to, in the output file it was written into.
+struct Realized {
+  std::string name;
+  json layouts;                      // by layout index (untouched ones as they are)
+  json textures = json::array();
+  double old_texels = 0, new_texels = 0;
+  size_t flips = 0, charts = 0, mesh_failed = 0;
+  double t_mesh = 0, t_pack = 0, t_bake = 0;
+  double q = -1;                     // 20-view GMSD of the file as written (-1: not scored)
+};
+
+perceptual::TriangleTarget target_of(const perceptual::TriangleResult& r, double floor) {
+  // S-bar = V(beta) diag(l1, l2) V(beta)^T with the stretches floored (eq. 13's factors).
+  const double l1 = std::max(r.lambda1, floor), l2 = std::max(r.lambda2, floor);
+  const double c = std::cos(r.beta), s = std::sin(r.beta);
+  const std::array<double, 4> S{c * c * l1 + s * s * l2, c * s * (l1 - l2), c * s * (l1 - l2), s * s * l1 + c * c * l2};
+  return {r.rotation, S, r.weight_rotation, r.weight_stretch};
+}
+
+// The largest singular value of the map old -> new of one triangle (both in texels).
+double largest_stretch(const double* a, const double* b, const double* c, const double* A, const double* B,
+                       const double* C) {
+  const double e[4] = {b[0] - a[0], c[0] - a[0], b[1] - a[1], c[1] - a[1]};  // old edges as columns
+  const double f[4] = {B[0] - A[0], C[0] - A[0], B[1] - A[1], C[1] - A[1]};  // new edges
+  const double det = e[0] * e[3] - e[1] * e[2];
+  if (!(std::abs(det) > 1e-12)) return 0;
+  // M = F E^-1; sigma_max^2 = (|M|_F^2 + sqrt(|M|_F^4 - 4 det(M)^2)) / 2.
+  const double m[4] = {(f[0] * e[3] - f[1] * e[2]) / det, (-f[0] * e[1] + f[1] * e[0]) / det,
+                       (f[2] * e[3] - f[3] * e[2]) / det, (-f[2] * e[1] + f[3] * e[0]) / det};
+  const double fro = m[0] * m[0] + m[1] * m[1] + m[2] * m[2] + m[3] * m[3], dm = m[0] * m[3] - m[1] * m[2];
+  return std::sqrt(0.5 * (fro + std::sqrt(std::max(0.0, fro * fro - 4 * dm * dm))));
+}
+
+// Builds one candidate into `file` (a copy of the input): mesh stage per chart, packing
+// into the budget, re-bake of every image of every prepared layout, new UV accessors.
+Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, const std::vector<Prepared>& prepared,
+                 const json& layout_base, io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o,
+                 const Candidate& cand, const Progress& progress, json& warnings) {
+  Realized out;
+  out.name = cand.name;
+  out.layouts = layout_base;
+  for (const Prepared& P : prepared) {
+    const size_t li = P.index;
+    const Layout& L = layouts[li];
+    const std::vector<Chart>& charts = P.charts;
+    const double W = P.W, H = P.H;
+    json& jl = out.layouts[li];
+    size_t layout_flips = 0, mesh_failed = 0;
+
+    // Mesh stage per chart. Weights floored relative to the whole layout's mean (not only
+    // the chart's): a chart of flat signal has weights near 0 everywhere and would follow
+    // its targets only at w / (w + w_rs) per iteration.
+    auto t0 = Clock::now();
+    perceptual::MeshStageOptions mesh_options;
+    {
+      double sum = 0;
+      size_t n = 0;
+      for (const auto& set : P.results)
+        for (const auto& r : set)
+          if (std::isfinite(r.weight_rotation) && std::isfinite(r.weight_stretch))
+            sum += r.weight_rotation + r.weight_stretch, n += 2;
+      mesh_options.weight_floor = n ? 1e-3 * sum / double(n) : 0;
+    }
+    std::vector<std::vector<double>> new_uv_of(charts.size());
+    for (size_t c = 0; c < charts.size(); ++c) {
+      const Chart& ch = charts[c];
+      if (!cand.reshape || P.results[ch.uv_set].empty() || ch.rigid || ch.shared) {
+        new_uv_of[c] = ch.uv;
+        continue;
+      }
+      std::vector<perceptual::TriangleTarget> targets;
+      targets.reserve(ch.triangles.size());
+      for (uint32_t t : ch.triangles) targets.push_back(target_of(P.results[ch.uv_set][t], cand.floor));
+      perceptual::MeshStageResult fit = perceptual::fit_chart(ch.uv, ch.local, targets, mesh_options);
+      new_uv_of[c] = std::move(fit.uv);
+      // A failed factorization leaves the chart at its input (or last accepted, flip-free)
+      // shape: said in the report and as a warning, never passed off as optimized.
+      if (fit.failed()) {
+        ++mesh_failed;
+        if (mesh_failed == 1)
+          warnings.push_back(cand.name + ": layout " + std::to_string(li) + " chart " + std::to_string(c) + ": mesh stage " + fit.failure);
+      }
+      if (progress) progress("mesh stage (" + cand.name + ", layout " + std::to_string(li) + ")", c + 1, charts.size());
+    }
+    // No triangle may flip relative to the input.
+    for (size_t c = 0; c < charts.size(); ++c) {
+      const Chart& ch = charts[c];
+      for (size_t t = 0; t < ch.triangles.size(); ++t) {
+        const uint32_t* l = &ch.local[3 * t];
+        double before = signed_area(&ch.uv[2 * l[0]], &ch.uv[2 * l[1]], &ch.uv[2 * l[2]]);
+        double after = signed_area(&new_uv_of[c][2 * l[0]], &new_uv_of[c][2 * l[1]], &new_uv_of[c][2 * l[2]]);
+        if ((before > 0 && after <= 0) || (before < 0 && after >= 0)) ++layout_flips;
+      }
+    }
+    out.t_mesh += seconds_since(t0);
+
+    // The packing scale may grow until the layout fills the budget, but no part of the
+    // surface should get more texels than the source has: the cap is the scale at which the
+    // densest triangles (area-weighted 98th percentile of the largest singular value of
+    // old -> new) reach the source density. A few outliers above it are only magnified.
+    double s_max = 1;
+    {
+      std::vector<std::pair<double, double>> sigma;  // (largest singular value, old area)
+      double total = 0;
+      for (size_t c = 0; c < charts.size(); ++c)
+        for (size_t t = 0; t < charts[c].triangles.size(); ++t) {
+          const uint32_t* l = &charts[c].local[3 * t];
+          const auto& u = charts[c].uv;
+          const auto& v = new_uv_of[c];
+          const double sm = largest_stretch(&u[2 * l[0]], &u[2 * l[1]], &u[2 * l[2]], &v[2 * l[0]], &v[2 * l[1]], &v[2 * l[2]]);
+          const double area = std::abs(signed_area(&u[2 * l[0]], &u[2 * l[1]], &u[2 * l[2]]));
+          if (sm > 0) sigma.push_back({sm, area}), total += area;
+        }
+      std::sort(sigma.begin(), sigma.end(), [](const auto& x, const auto& y) { return x.first > y.first; });
+      double above = 0;
+      for (const auto& [sm, area] : sigma) {
+        above += area;
+        if (above >= 0.02 * total) {
+          s_max = 1 / sm;
+          break;
+        }
+      }
+      s_max = std::clamp(s_max, 1.0, 1.0 / o.triangle.lambda_min);
+    }
+
+    // Pack into the budget (eq. 20-21).
+    t0 = Clock::now();
+    std::vector<atlas::ChartShape> shapes(P.units.size());
+    for (size_t u = 0; u < P.units.size(); ++u)
+      for (uint32_t c : P.units[u]) {
+        const uint32_t base = uint32_t(shapes[u].points.size() / 2);
+        shapes[u].points.insert(shapes[u].points.end(), new_uv_of[c].begin(), new_uv_of[c].end());
+        for (uint32_t l : charts[c].local) shapes[u].triangles.push_back(base + l);
+      }
+    atlas::BudgetOptions budget;
+    budget.cost = o.max_gmsd > 0 ? 1.0 : o.cost, budget.size = o.max_gmsd > 0 ? 0 : o.size;
+    budget.pot = o.power_of_two;
+    budget.s_max = s_max;
+    budget.measure = atlas::CostMeasure::ImageTexels;  // --cost is about texture memory
+    budget.pack.gutter = o.gutter, budget.pack.block = o.block;
+    atlas::AtlasChoice choice = atlas::choose_atlas(shapes, P.driver.width, P.driver.height, P.old_used, budget);
+    if (!choice.packing.ok)
+      throw InputError(file.path, "the charts of layout " + std::to_string(li) + " do not fit any atlas within the budget");
+    const auto& packing = choice.packing;
+    // New UVs per primitive vertex (vertices no triangle uses keep theirs).
+    std::vector<std::vector<float>> new_uv(L.uv_sets.size()), welded_new(L.uv_sets.size());
+    for (size_t si = 0; si < L.uv_sets.size(); ++si) welded_new[si].assign(2 * P.welded_count[si], 0.0f);
+    for (size_t c = 0; c < charts.size(); ++c)
+      for (size_t v = 0; v < charts[c].vertices.size(); ++v) {
+        auto uv = packing.map_uv(P.unit_of_chart[c], new_uv_of[c][2 * v], new_uv_of[c][2 * v + 1]);
+        welded_new[charts[c].uv_set][2 * charts[c].vertices[v]] = float(uv[0]);
+        welded_new[charts[c].uv_set][2 * charts[c].vertices[v] + 1] = float(uv[1]);
+      }
+    for (size_t si = 0; si < L.uv_sets.size(); ++si) {
+      const io::Primitive& prim = asset.primitives[size_t(L.uv_sets[si].primitive)];
+      new_uv[si] = prim.uv_sets[size_t(L.uv_sets[si].tex_coord)].uv;
+      for (size_t v = 0; v < prim.vertex_count(); ++v) {
+        uint32_t w = P.welded_of_vertex[si][v];
+        if (w == UINT32_MAX) continue;
+        new_uv[si][2 * v] = welded_new[si][2 * w], new_uv[si][2 * v + 1] = welded_new[si][2 * w + 1];
+      }
+    }
+    out.t_pack += seconds_since(t0);
+
+    // Re-bake every image of the layout into the new UVs, at the driver's new density.
+    t0 = Clock::now();
+    std::vector<atlas::RebakeMesh> meshes;
+    for (size_t si = 0; si < L.uv_sets.size(); ++si) {
+      const io::Primitive& prim = asset.primitives[size_t(L.uv_sets[si].primitive)];
+      meshes.push_back({prim.indices.data(), prim.indices.size(), prim.uv_sets[size_t(L.uv_sets[si].tex_coord)].uv.data(),
+                        new_uv[si].data(), prim.vertex_count()});
+    }
+    size_t baked_count = 0;
+    for (int i : L.images) {
+      const io::AssetImage& img = asset.images[size_t(i)];
+      const std::string name = file.path + ": image " + std::to_string(i);
+      Image source = i == L.driver ? P.driver : io::decode_image(file.image_bytes[size_t(i)], name);
+      atlas::RebakeOptions ro;
+      ro.width = std::max(1u, uint32_t(std::lround(double(packing.width) * source.width / W)));
+      ro.height = std::max(1u, uint32_t(std::lround(double(packing.height) * source.height / H)));
+      ro.role = atlas::RebakeRole::Color;
+      for (const auto& use : img.uses) {
+        // A tangent-space normal map is rotated into the new UV frame, which is the frame a
+        // renderer derives (MikkTSpace) when the mesh has no TANGENT attribute. With stored
+        // tangents the frame stays the old one, so the texels must stay as they are.
+        if (use.role == io::TextureRole::Normal)
+          ro.role = has_tangents(file.model, asset.primitives[size_t(use.primitive)]) ? atlas::RebakeRole::Data
+                                                                                      : atlas::RebakeRole::Normal;
+        else if (io::color_space_of(use.role) == ColorSpace::Linear && ro.role == atlas::RebakeRole::Color)
+          ro.role = atlas::RebakeRole::Data;
+        ro.wrap_s = use.wrap_s, ro.wrap_t = use.wrap_t;
+      }
+      Image baked = atlas::rebake(source, meshes, ro, nullptr, &engine);
+      const std::vector<uint8_t> old_bytes = file.image_bytes[size_t(i)];
+      file.image_bytes[size_t(i)] = io::encode_image(baked, format_of(old_bytes));
+      out.old_texels += double(source.width) * source.height;
+      out.new_texels += double(baked.width) * baked.height;
+      out.textures.push_back({{"image", i},
+                              {"name", img.name},
+                              {"role", img.uses.empty() ? "other" : io::to_string(img.uses.front().role)},
+                              {"old_size", {source.width, source.height}},
+                              {"new_size", {baked.width, baked.height}},
+                              {"old_bytes", old_bytes.size()},
+                              {"new_bytes", file.image_bytes[size_t(i)].size()}});
+      if (progress) progress("re-bake (" + cand.name + ", layout " + std::to_string(li) + ")", ++baked_count, L.images.size());
+    }
+    out.t_bake += seconds_since(t0);
+
+    // New UV accessors (the old ones may be shared with primitives outside the layout).
+    for (size_t si = 0; si < L.uv_sets.size(); ++si) {
+      const io::Primitive& prim = asset.primitives[size_t(L.uv_sets[si].primitive)];
+      auto& gp = file.model.meshes[size_t(prim.mesh)].primitives[size_t(prim.primitive)];
+      gp.attributes["TEXCOORD_" + std::to_string(L.uv_sets[si].tex_coord)] = io::append_float_accessor(file.model, new_uv[si], TINYGLTF_TYPE_VEC2);
+    }
+    out.flips += layout_flips;
+    out.charts += charts.size();
+    out.mesh_failed += mesh_failed;
+    jl["charts"] = charts.size();
+    jl["rigid_charts"] = P.rigid;
+    jl["shared_texel_charts"] = P.shared_charts;  // packed with the charts they share texels with, unreshaped
+    jl["packing_units"] = P.units.size();
+    jl["atlas"] = {packing.width, packing.height};
+    jl["scale"] = packing.scale;
+    jl["scale_cap"] = s_max;  // the source density of the densest triangles
+    jl["capped_at_source_density"] = packing.scale >= 0.999 * s_max;
+    jl["packing_efficiency"] = packing.efficiency;
+    jl["chart_cost_ratio"] = choice.cost_ratio;
+    jl["flips"] = layout_flips;
+    if (!P.results.empty() && o.optimize) {
+      jl["mesh_stage_failed_charts"] = mesh_failed;
+      if (mesh_failed > 1)
+        warnings.push_back(cand.name + ": layout " + std::to_string(li) + ": the mesh stage failed on " + std::to_string(mesh_failed) + " charts (kept unreshaped)");
+      jl["triangle_stage"] = P.tri.to_json(o.triangle);
+    }
+  }
+  return out;
+}
+
+// The plain resize a user would do instead (gltf-transform resize, Lanczos-3 in stored
+// values): every image of the prepared layouts resized to the size `sizes` gives it.
+void resize_images(io::GltfFile& file, const std::vector<std::pair<int, std::array<uint32_t, 2>>>& sizes) {
+  for (const auto& [i, size] : sizes) {
+    const std::string name = file.path + ": image " + std::to_string(i);
+    Image img = io::decode_image(file.image_bytes[size_t(i)], name);
+    if (img.width == size[0] && img.height == size[1]) continue;
+    Image small = eval::resize_lanczos3(img, size[0], size[1], false);
+    file.image_bytes[size_t(i)] = io::encode_image(small, format_of(file.image_bytes[size_t(i)]));
+  }
+}
+
 }  // namespace
 
-json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o, const Progress& progress) {
+json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o, const Progress& progress,
+             io::GltfFile* layout_out) {
   const auto t_start = Clock::now();
-  const io::GltfFile original = o.max_gmsd > 0 ? file : io::GltfFile{};
+  const io::GltfFile original = file;
   json report;
   json stages = json::object();
   json warnings = json::array();
@@ -157,10 +488,10 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
   report["device"] = device.name;
   report["backend"] = device.backend;
 
-  size_t flips = 0, total_charts = 0, optimized = 0, infeasible = 0;
-  double old_texels = 0, new_texels = 0;
-  json textures = json::array(), layout_reports = json::array();
-  double t_triangle = 0, t_mesh = 0, t_pack = 0, t_bake = 0;
+  size_t optimized = 0, infeasible = 0;
+  double t_triangle = 0;
+  json layout_base = json::array();
+  std::vector<Prepared> prepared;
 
   for (size_t li = 0; li < layouts.size(); ++li) {
     Layout& L = layouts[li];
@@ -173,12 +504,18 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
     if (!L.untouched.empty()) {
       jl["untouched"] = L.untouched;
       warnings.push_back("layout " + std::to_string(li) + " left untouched: " + L.untouched);
-      layout_reports.push_back(jl);
+      layout_base.push_back(jl);
       continue;
     }
+    layout_base.push_back(jl);
+    prepared.emplace_back();
+    Prepared& P = prepared.back();
+    P.index = li;
     const std::string driver_name = file.path + ": image " + std::to_string(L.driver);
-    Image driver = io::decode_image(file.image_bytes[size_t(L.driver)], driver_name);
+    P.driver = io::decode_image(file.image_bytes[size_t(L.driver)], driver_name);
+    const Image& driver = P.driver;
     const double W = driver.width, H = driver.height;
+    P.W = W, P.H = H;
     // The uniform scale a plain resize to the requested cost applies (rate control's yardstick).
     double rate_scale = 0;
     if (o.optimize && o.rate_control && o.max_gmsd <= 0) {
@@ -188,13 +525,11 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
     std::vector<float> luminance = perceptual::luminance_plane(driver);
 
     // Charts of every UV set, with the triangle stage's targets.
-    std::vector<Chart> charts;
-    std::vector<std::vector<uint32_t>> welded_of_vertex(L.uv_sets.size());  // primitive vertex -> welded UV id
-    std::vector<size_t> welded_count(L.uv_sets.size());
-    std::vector<std::vector<perceptual::TriangleTarget>> chart_targets(L.uv_sets.size());
-    double old_used = 0;  // eq. 20: source texels under the input's charts
-    size_t layout_flips = 0, rigid = 0, mesh_failed = 0;
-    TriangleCounts tri;
+    std::vector<Chart>& charts = P.charts;
+    auto& welded_of_vertex = P.welded_of_vertex;
+    auto& welded_count = P.welded_count;
+    auto& tri = P.tri;
+    welded_of_vertex.resize(L.uv_sets.size()), welded_count.resize(L.uv_sets.size()), P.results.resize(L.uv_sets.size());
     for (size_t si = 0; si < L.uv_sets.size(); ++si) {
       const io::Primitive& prim = asset.primitives[size_t(L.uv_sets[si].primitive)];
       const std::vector<float>& uv = prim.uv_sets[size_t(L.uv_sets[si].tex_coord)].uv;
@@ -205,8 +540,7 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
       for (size_t c = 0; c < prim.indices.size(); ++c) welded_of_vertex[si][prim.indices[c]] = welded.uv_triangles[c];
       atlas::Charts found = atlas::find_charts(welded);
 
-      // Triangle stage (or identity targets when not optimizing).
-      std::vector<perceptual::TriangleTarget> targets(prim.triangle_count());
+      // Triangle stage (kept per triangle; the candidates derive their targets from it).
       if (o.optimize && prim.triangle_count() > 0) {
         auto t0 = Clock::now();
         perceptual::TriangleViewInput in{prim.positions.data(), prim.vertex_count(), prim.indices.data(),
@@ -231,7 +565,6 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
         auto results = perceptual::optimize_triangles(engine, in, luminance, topt);
         for (size_t t = 0; t < results.size(); ++t) {
           const auto& r = results[t];
-          targets[t] = {r.rotation, r.stretch, r.weight_rotation, r.weight_stretch};
           tri.optimized += 1;
           tri.feasible += r.feasible;
           if (!r.feasible) tri.infeasible_identity_gmsd.push_back(r.identity_gmsd);
@@ -240,9 +573,9 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
           tri.coarsened += r.identity_lattice > 1;
           tri.lambda_area.push_back(r.lambda1 * r.lambda2);
         }
+        P.results[si] = std::move(results);
         t_triangle += seconds_since(t0);
       }
-      chart_targets[si] = std::move(targets);
 
       const size_t first_chart = charts.size();
       charts.resize(first_chart + found.count);
@@ -267,205 +600,81 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
         size_t positive = 0, negative = 0;
         for (size_t t = 0; t < ch.triangles.size(); ++t) {
           double a = signed_area(&ch.uv[2 * ch.local[3 * t]], &ch.uv[2 * ch.local[3 * t + 1]], &ch.uv[2 * ch.local[3 * t + 2]]);
-          old_used += std::abs(a);
+          P.old_used += std::abs(a);
           positive += a > 0, negative += a < 0;
         }
         if (negative > positive)
           for (size_t t = 0; t < ch.triangles.size(); ++t) std::swap(ch.local[3 * t + 1], ch.local[3 * t + 2]);
         ch.rigid = positive > 0 && negative > 0;
-        rigid += ch.rigid;
+        P.rigid += ch.rigid;
       }
     }
+    find_shared_texels(P);
 
-    // Mesh stage per chart. Weights floored relative to the whole layout's mean (not only
-    // the chart's): a chart of flat signal has weights near 0 everywhere and would follow
-    // its targets only at w / (w + w_rs) per iteration.
-    auto t0 = Clock::now();
-    perceptual::MeshStageOptions mesh_options;
-    {
-      double sum = 0;
-      size_t n = 0;
-      for (const auto& set : chart_targets)
-        for (const auto& t : set)
-          if (std::isfinite(t.weight_rotation) && std::isfinite(t.weight_stretch))
-            sum += t.weight_rotation + t.weight_stretch, n += 2;
-      mesh_options.weight_floor = n ? 1e-3 * sum / double(n) : 0;
-    }
-    for (size_t c = 0; c < charts.size(); ++c) {
-      Chart& ch = charts[c];
-      if (!o.optimize || ch.rigid) {
-        ch.new_uv = ch.uv;
-        continue;
-      }
-      std::vector<perceptual::TriangleTarget> targets;
-      targets.reserve(ch.triangles.size());
-      for (uint32_t t : ch.triangles) targets.push_back(chart_targets[ch.uv_set][t]);
-      perceptual::MeshStageResult fit = perceptual::fit_chart(ch.uv, ch.local, targets, mesh_options);
-      ch.new_uv = std::move(fit.uv);
-      // A failed factorization leaves the chart at its input (or last accepted, flip-free)
-      // shape: said in the report and as a warning, never passed off as optimized.
-      if (fit.failed()) {
-        ++mesh_failed;
-        if (mesh_failed == 1) warnings.push_back("layout " + std::to_string(li) + " chart " + std::to_string(c) + ": mesh stage " + fit.failure);
-      }
-      if (progress) progress("mesh stage (layout " + std::to_string(li) + ")", c + 1, charts.size());
-    }
-    // No triangle may flip relative to the input.
-    for (const Chart& ch : charts)
-      for (size_t t = 0; t < ch.triangles.size(); ++t) {
-        const uint32_t* l = &ch.local[3 * t];
-        double before = signed_area(&ch.uv[2 * l[0]], &ch.uv[2 * l[1]], &ch.uv[2 * l[2]]);
-        double after = signed_area(&ch.new_uv[2 * l[0]], &ch.new_uv[2 * l[1]], &ch.new_uv[2 * l[2]]);
-        if ((before > 0 && after <= 0) || (before < 0 && after >= 0)) ++layout_flips;
-      }
-    t_mesh += seconds_since(t0);
-
-    // The packing scale may grow until the layout fills the budget, but no part of the
-    // surface should get more texels than the source has: the cap is the scale at which the
-    // densest triangles (area-weighted 98th percentile of the largest singular value of
-    // old -> new) reach the source density. A few outliers above it are only magnified.
-    double s_max = 1;
-    {
-      std::vector<std::pair<double, double>> sigma;  // (largest singular value, old area)
-      double total = 0;
-      for (const Chart& ch : charts)
-        for (size_t t = 0; t < ch.triangles.size(); ++t) {
-          const uint32_t* l = &ch.local[3 * t];
-          const double* a = &ch.uv[2 * l[0]];
-          const double* b = &ch.uv[2 * l[1]];
-          const double* c = &ch.uv[2 * l[2]];
-          const double* A = &ch.new_uv[2 * l[0]];
-          const double* B = &ch.new_uv[2 * l[1]];
-          const double* C = &ch.new_uv[2 * l[2]];
-          const double e[4] = {b[0] - a[0], c[0] - a[0], b[1] - a[1], c[1] - a[1]};  // old edges as columns
-          const double f[4] = {B[0] - A[0], C[0] - A[0], B[1] - A[1], C[1] - A[1]};  // new edges
-          const double det = e[0] * e[3] - e[1] * e[2];
-          if (!(std::abs(det) > 1e-12)) continue;
-          // M = F E^-1; sigma_max^2 = (|M|_F^2 + sqrt(|M|_F^4 - 4 det(M)^2)) / 2.
-          const double m[4] = {(f[0] * e[3] - f[1] * e[2]) / det, (-f[0] * e[1] + f[1] * e[0]) / det,
-                               (f[2] * e[3] - f[3] * e[2]) / det, (-f[2] * e[1] + f[3] * e[0]) / det};
-          const double fro = m[0] * m[0] + m[1] * m[1] + m[2] * m[2] + m[3] * m[3], dm = m[0] * m[3] - m[1] * m[2];
-          const double sm = std::sqrt(0.5 * (fro + std::sqrt(std::max(0.0, fro * fro - 4 * dm * dm))));
-          sigma.push_back({sm, 0.5 * std::abs(det)});
-          total += 0.5 * std::abs(det);
-        }
-      std::sort(sigma.begin(), sigma.end(), [](const auto& x, const auto& y) { return x.first > y.first; });
-      double above = 0;
-      for (const auto& [sm, area] : sigma) {
-        above += area;
-        if (above >= 0.02 * total) {
-          if (sm > 0) s_max = 1 / sm;
-          break;
-        }
-      }
-      s_max = std::clamp(s_max, 1.0, 1.0 / o.triangle.lambda_min);
-    }
-
-    // Pack into the budget (eq. 20-21), never above the source texel density.
-    t0 = Clock::now();
-    std::vector<atlas::ChartShape> shapes(charts.size());
-    for (size_t c = 0; c < charts.size(); ++c) shapes[c] = {charts[c].new_uv, charts[c].local};
-    atlas::BudgetOptions budget;
-    budget.cost = o.max_gmsd > 0 ? 1.0 : o.cost, budget.size = o.max_gmsd > 0 ? 0 : o.size;
-    budget.pot = o.power_of_two;
-    budget.s_max = s_max;
-    budget.measure = atlas::CostMeasure::ImageTexels;  // --cost is about texture memory
-    budget.pack.gutter = o.gutter, budget.pack.block = o.block;
-    atlas::AtlasChoice choice = atlas::choose_atlas(shapes, driver.width, driver.height, old_used, budget);
-    if (!choice.packing.ok)
-      throw InputError(file.path, "the charts of layout " + std::to_string(li) + " do not fit any atlas within the budget");
-    const auto& packing = choice.packing;
-    // New UVs per primitive vertex (vertices no triangle uses keep theirs).
-    std::vector<std::vector<float>> new_uv(L.uv_sets.size()), welded_new(L.uv_sets.size());
-    for (size_t si = 0; si < L.uv_sets.size(); ++si) welded_new[si].assign(2 * welded_count[si], 0.0f);
-    for (size_t c = 0; c < charts.size(); ++c)
-      for (size_t v = 0; v < charts[c].vertices.size(); ++v) {
-        auto uv = packing.map_uv(c, charts[c].new_uv[2 * v], charts[c].new_uv[2 * v + 1]);
-        welded_new[charts[c].uv_set][2 * charts[c].vertices[v]] = float(uv[0]);
-        welded_new[charts[c].uv_set][2 * charts[c].vertices[v] + 1] = float(uv[1]);
-      }
-    for (size_t si = 0; si < L.uv_sets.size(); ++si) {
-      const io::Primitive& prim = asset.primitives[size_t(L.uv_sets[si].primitive)];
-      new_uv[si] = prim.uv_sets[size_t(L.uv_sets[si].tex_coord)].uv;
-      for (size_t v = 0; v < prim.vertex_count(); ++v) {
-        uint32_t w = welded_of_vertex[si][v];
-        if (w == UINT32_MAX) continue;
-        new_uv[si][2 * v] = welded_new[si][2 * w], new_uv[si][2 * v + 1] = welded_new[si][2 * w + 1];
-      }
-    }
-    t_pack += seconds_since(t0);
-
-    // Re-bake every image of the layout into the new UVs, at the driver's new density.
-    t0 = Clock::now();
-    std::vector<atlas::RebakeMesh> meshes;
-    for (size_t si = 0; si < L.uv_sets.size(); ++si) {
-      const io::Primitive& prim = asset.primitives[size_t(L.uv_sets[si].primitive)];
-      meshes.push_back({prim.indices.data(), prim.indices.size(), prim.uv_sets[size_t(L.uv_sets[si].tex_coord)].uv.data(),
-                        new_uv[si].data(), prim.vertex_count()});
-    }
-    size_t baked_count = 0;
-    for (int i : L.images) {
-      const io::AssetImage& img = asset.images[size_t(i)];
-      const std::string name = file.path + ": image " + std::to_string(i);
-      Image source = i == L.driver ? driver : io::decode_image(file.image_bytes[size_t(i)], name);
-      atlas::RebakeOptions ro;
-      ro.width = std::max(1u, uint32_t(std::lround(double(packing.width) * source.width / W)));
-      ro.height = std::max(1u, uint32_t(std::lround(double(packing.height) * source.height / H)));
-      ro.role = atlas::RebakeRole::Color;
-      for (const auto& use : img.uses) {
-        // A tangent-space normal map is rotated into the new UV frame, which is the frame a
-        // renderer derives (MikkTSpace) when the mesh has no TANGENT attribute. With stored
-        // tangents the frame stays the old one, so the texels must stay as they are.
-        if (use.role == io::TextureRole::Normal)
-          ro.role = has_tangents(file.model, asset.primitives[size_t(use.primitive)]) ? atlas::RebakeRole::Data
-                                                                                      : atlas::RebakeRole::Normal;
-        else if (io::color_space_of(use.role) == ColorSpace::Linear && ro.role == atlas::RebakeRole::Color)
-          ro.role = atlas::RebakeRole::Data;
-        ro.wrap_s = use.wrap_s, ro.wrap_t = use.wrap_t;
-      }
-      Image baked = atlas::rebake(source, meshes, ro, nullptr, &engine);
-      const std::vector<uint8_t> old_bytes = file.image_bytes[size_t(i)];
-      file.image_bytes[size_t(i)] = io::encode_image(baked, format_of(old_bytes));
-      old_texels += double(source.width) * source.height;
-      new_texels += double(baked.width) * baked.height;
-      textures.push_back({{"image", i},
-                          {"name", img.name},
-                          {"role", img.uses.empty() ? "other" : io::to_string(img.uses.front().role)},
-                          {"old_size", {source.width, source.height}},
-                          {"new_size", {baked.width, baked.height}},
-                          {"old_bytes", old_bytes.size()},
-                          {"new_bytes", file.image_bytes[size_t(i)].size()}});
-      if (progress) progress("re-bake (layout " + std::to_string(li) + ")", ++baked_count, L.images.size());
-    }
-    t_bake += seconds_since(t0);
-
-    // New UV accessors (the old ones may be shared with primitives outside the layout).
-    for (size_t si = 0; si < L.uv_sets.size(); ++si) {
-      const io::Primitive& prim = asset.primitives[size_t(L.uv_sets[si].primitive)];
-      auto& gp = file.model.meshes[size_t(prim.mesh)].primitives[size_t(prim.primitive)];
-      gp.attributes["TEXCOORD_" + std::to_string(L.uv_sets[si].tex_coord)] = io::append_float_accessor(file.model, new_uv[si], TINYGLTF_TYPE_VEC2);
-    }
-    flips += layout_flips;
-    total_charts += charts.size();
-    jl["charts"] = charts.size();
-    jl["rigid_charts"] = rigid;
-    jl["atlas"] = {packing.width, packing.height};
-    jl["scale"] = packing.scale;
-    jl["scale_cap"] = s_max;  // the source density of the densest triangles
-    jl["capped_at_source_density"] = packing.scale >= 0.999 * s_max;
-    jl["packing_efficiency"] = packing.efficiency;
-    jl["chart_cost_ratio"] = choice.cost_ratio;
-    jl["flips"] = layout_flips;
-    if (o.optimize) {
-      jl["mesh_stage_failed_charts"] = mesh_failed;
-      if (mesh_failed > 1) warnings.push_back("layout " + std::to_string(li) + ": the mesh stage failed on " + std::to_string(mesh_failed) + " charts (kept unreshaped)");
-      jl["triangle_stage"] = tri.to_json(o.triangle);
-      infeasible += tri.optimized - tri.feasible, optimized += tri.optimized;
-    }
-    layout_reports.push_back(jl);
+    optimized += P.tri.optimized, infeasible += P.tri.optimized - P.tri.feasible;
   }
 
-  if (o.max_gmsd > 0 && !textures.empty()) {
+  // Candidates: the paper's targets, the same with the stretches floored, and the input's
+  // charts only repacked. Each is built into a copy of the input and scored as written
+  // (20 views against the input, eval's protocol); the best is kept. --max-gmsd sizes one
+  // layout on its own curve instead.
+  std::vector<Candidate> plans;
+  if (o.optimize) plans.push_back({"optimized", true, 0.0});
+  if (o.max_gmsd <= 0 && !prepared.empty() && o.candidates) {
+    if (o.optimize) plans.push_back({"floor-0.25", true, 0.25}), plans.push_back({"floor-0.5", true, 0.5});
+  }
+  if (!o.optimize || (o.max_gmsd <= 0 && o.candidates)) plans.push_back({"repack", false, 1.0});
+  eval::EvalOptions score_options;
+  score_options.artifacts = false;
+  std::vector<Realized> built;
+  std::vector<io::GltfFile> files;
+  double t_score = 0;
+  for (const Candidate& c : plans) {
+    files.push_back(original);
+    built.push_back(realize(asset, layouts, prepared, layout_base, files.back(), engine, o, c, progress, warnings));
+    if (plans.size() > 1 || (o.guard && o.max_gmsd <= 0 && !prepared.empty())) {
+      auto t0 = Clock::now();
+      built.back().q = eval::score_as_written(original, files.back(), engine, score_options).q;
+      t_score += seconds_since(t0);
+    }
+  }
+  size_t best = 0;
+  for (size_t k = 1; k < built.size(); ++k)
+    if (built[k].q < built[best].q) best = k;
+  json candidates = json::array();
+  for (const Realized& r : built)
+    candidates.push_back({{"name", r.name},
+                          {"cost_ratio", r.old_texels > 0 ? r.new_texels / r.old_texels : 1.0},
+                          {"q", r.q >= 0 ? json(r.q) : json(nullptr)}});
+  Realized chosen = std::move(built[best]);
+  file = std::move(files[best]);
+  files.clear();
+  if (layout_out) *layout_out = file;
+
+  // The guard: the same texels spent on a plain resize of the input (Lanczos-3, what users'
+  // tools do). Whichever looks better on screen is written; --force-reparam skips this.
+  json guard = nullptr;
+  std::string chosen_by = prepared.empty() ? "untouched" : "reparam";
+  if (o.guard && o.max_gmsd <= 0 && !prepared.empty()) {
+    auto t0 = Clock::now();
+    std::vector<std::pair<int, std::array<uint32_t, 2>>> sizes;
+    for (const auto& t : chosen.textures) sizes.push_back({t["image"].get<int>(), {t["new_size"][0].get<uint32_t>(), t["new_size"][1].get<uint32_t>()}});
+    io::GltfFile resized = original;
+    resize_images(resized, sizes);
+    const double q_resize = eval::score_as_written(original, resized, engine, score_options).q;
+    t_score += seconds_since(t0);
+    guard = {{"q_reparam", chosen.q}, {"q_resize", q_resize}, {"resize", "lanczos3-srgb"}};
+    if (!(chosen.q < q_resize)) {
+      chosen_by = "resize";
+      file = std::move(resized);
+      for (auto& t : chosen.textures) t["new_bytes"] = file.image_bytes[size_t(t["image"].get<int>())].size();
+      warnings.push_back("the plain resize to the same texels looks better (q " + std::to_string(q_resize) + " vs " +
+                         std::to_string(chosen.q) + "): wrote the resize");
+    }
+    guard["chosen"] = chosen_by;
+  }
+
+  if (o.max_gmsd > 0 && !chosen.textures.empty()) {
     // --max-gmsd: the cheapest point of the new layout's q-c curve that meets the bound.
     auto t0 = Clock::now();
     eval::EvalOptions eo;
@@ -486,8 +695,8 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
         break;
       }
     if (!met) warnings.push_back("no size meets --max-gmsd " + std::to_string(o.max_gmsd) + "; kept the source density");
-    new_texels = 0;
-    for (auto& t : textures) {
+    chosen.new_texels = 0;
+    for (auto& t : chosen.textures) {
       const int i = t["image"].get<int>();
       Image img = io::decode_image(file.image_bytes[size_t(i)], file.path);
       const uint32_t w = std::max(1u, uint32_t(std::lround(img.width * ratio)));
@@ -498,21 +707,27 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
       }
       t["new_size"] = {w, h};
       t["new_bytes"] = file.image_bytes[size_t(i)].size();
-      new_texels += double(w) * h;
+      chosen.new_texels += double(w) * h;
     }
     report["max_gmsd"] = {{"bound", o.max_gmsd}, {"met", met}, {"c_r", chosen_c}, {"q", chosen_q}, {"scale", ratio}};
     stages["max_gmsd_eval"] = seconds_since(t0);
   }
 
   stages["triangle_stage"] = t_triangle;
-  stages["mesh_stage"] = t_mesh;
-  stages["pack"] = t_pack;
-  stages["rebake"] = t_bake;
-  report["layouts"] = layout_reports;
-  report["textures"] = textures;
-  report["cost_ratio"] = old_texels > 0 ? new_texels / old_texels : 1.0;
-  report["flips"] = flips;
-  report["charts"] = total_charts;
+  stages["mesh_stage"] = chosen.t_mesh;
+  stages["pack"] = chosen.t_pack;
+  stages["rebake"] = chosen.t_bake;
+  stages["candidates_and_guard"] = t_score;
+  report["chosen"] = chosen_by;
+  report["layout"] = chosen.name;
+  report["candidates"] = candidates;
+  report["guard"] = guard;
+  report["q"] = chosen_by == "resize" ? guard["q_resize"] : (chosen.q >= 0 ? json(chosen.q) : json(nullptr));
+  report["layouts"] = chosen.layouts;
+  report["textures"] = chosen.textures;
+  report["cost_ratio"] = chosen.old_texels > 0 ? chosen.new_texels / chosen.old_texels : 1.0;
+  report["flips"] = chosen_by == "resize" ? 0 : chosen.flips;
+  report["charts"] = chosen.charts;
   report["triangles_optimized"] = optimized;
   report["triangles_infeasible"] = infeasible;
   report["stages"] = stages;

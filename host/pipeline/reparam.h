@@ -34,6 +34,12 @@ struct ReparamOptions {
   bool rate_control = true;
   double rate_margin = 1.25;
   double rate_floor = 1e-4;
+  // Build a few candidate layouts (the paper's targets, floored stretches, a plain repack)
+  // and keep the one whose written file scores best over eval's 20 views.
+  bool candidates = true;
+  // Before writing, compare the result with the input resized (Lanczos-3) to the same
+  // texels by the same 20-view score, and write the better (--force-reparam: false).
+  bool guard = true;
   perceptual::TriangleStageOptions triangle;
 };
 
@@ -43,7 +49,12 @@ using Progress = std::function<void(const std::string& stage, size_t done, size_
 // Re-parameterizes `file` in place (model and image_bytes). Returns the report: device,
 // layouts, textures (old/new size and bytes), cost_ratio, flips, charts, packing
 // efficiency, per-stage seconds, warnings (e.g. tiled layouts left untouched).
+// The report also says which candidate layout was kept (`layout`, `candidates` with each
+// one's cost and 20-view q as written) and what the guard decided (`chosen`: "reparam",
+// "resize" or "untouched"; `guard`: both q values). `layout_out`, when given, receives
+// reparam's kept layout as built even when the guard writes the resize (bench quality
+// scores that layout's own curve).
 nlohmann::ordered_json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& options,
-                               const Progress& progress = {});
+                               const Progress& progress = {}, io::GltfFile* layout_out = nullptr);
 
 }  // namespace uvpress::pipeline

@@ -94,6 +94,8 @@ void add_batch(CLI::App& app, Globals& g) {
   cmd->add_flag("--early-stop", o.reparam.triangle.early_stop, "Stop a triangle's search once it stalls");
   cmd->add_option("--seed", o.reparam.triangle.seed, "Seed of the Bayesian optimization")->capture_default_str();
   cmd->add_flag("--no-optimize", a->no_optimize, "Keep every triangle's shape: only repack and re-bake");
+  cmd->add_flag("--force-reparam", [a](int64_t) { a->o.reparam.guard = false; },
+                "Write reparam's layout even when a plain resize to the same texels looks better");
   cmd->add_flag("--eval", o.eval, "Also evaluate each result against its input (NAME.eval.json)");
   cmd->add_option("--eval-resolution", o.eval_options.resolution, "eval: view images, pixels a side")->capture_default_str()->check(CLI::Range(8u, 1024u));
   cmd->add_option("--eval-cost-grid", a->grid, "eval: relative costs, each in (0, 4], comma-separated")

@@ -81,6 +81,8 @@ void add_reparam(CLI::App& app, Globals& g) {
   cmd->add_option("--seed", o->triangle.seed, "Seed of the Bayesian optimization")->capture_default_str();
   cmd->add_flag("--early-stop", o->triangle.early_stop, "Stop a triangle's search once it stalls (30+ evaluations, 25 without gain)");
   cmd->add_flag("--no-optimize", *no_optimize, "Keep every triangle's shape: only repack and re-bake");
+  cmd->add_flag("--force-reparam", [o](int64_t) { o->guard = false; },
+                "Write reparam's layout even when a plain resize to the same texels looks better");
   cmd->callback([&g, input, output, o, no_optimize] {
     g.action = [&g, input, output, o, no_optimize] {
       auto t0 = std::chrono::steady_clock::now();
@@ -113,9 +115,23 @@ void add_reparam(CLI::App& app, Globals& g) {
         std::snprintf(text, sizeof text, " (--cost %.3g: capped at the source texel density)", o->cost);
         capped = text;
       }
-      std::printf("%s (%s, %llu texels) -> %s (%s, %llu texels), cost ratio %.3f%s%s, %.1f s\n", input->c_str(),
+      // What was written, and how it compares on screen with the resize a user would do.
+      std::string verdict;
+      if (report["guard"].is_object()) {
+        const auto& gr = report["guard"];
+        char text[200];
+        if (report["chosen"] == "reparam")
+          std::snprintf(text, sizeof text, "; on screen q %.3g vs %.3g for a plain resize to the same texels (%s layout kept)",
+                        gr["q_reparam"].get<double>(), gr["q_resize"].get<double>(), report["layout"].get<std::string>().c_str());
+        else
+          std::snprintf(text, sizeof text, "; wrote a plain resize: it looks better (q %.3g) than reparam's layout (q %.3g)",
+                        gr["q_resize"].get<double>(), gr["q_reparam"].get<double>());
+        verdict = text;
+      }
+      std::printf("%s (%s, %llu texels) -> %s (%s, %llu texels), cost ratio %.3f%s%s%s, %.1f s\n", input->c_str(),
                   human_bytes(in_bytes).c_str(), (unsigned long long)old_t, output->c_str(), human_bytes(out_bytes).c_str(),
-                  (unsigned long long)new_t, report["cost_ratio"].get<double>(), capped.c_str(), infeasible.c_str(), seconds);
+                  (unsigned long long)new_t, report["cost_ratio"].get<double>(), capped.c_str(), infeasible.c_str(),
+                  verdict.c_str(), seconds);
       if (g.verbose)
         for (auto& [stage, s] : report["stages"].items()) std::fprintf(stderr, "%s: %.2f s\n", stage.c_str(), s.get<double>());
       nlohmann::ordered_json out = {{"input", *input}, {"output", *output}, {"device", report["device"]},

@@ -1,0 +1,107 @@
+// uvpress bench quality: does reparam beat the resize a user would do? For the demo asset
+// and the shared assets (and --asset FILE): reparam at --cost, then eval of its kept layout
+// against the input (the input curve is the Lanczos-3 resize) and the isometric layout.
+// One JSON line per asset: the pixel ratios at equal q from the layout's own curve
+// (whatever the guard wrote), q at the output cost for the written file and for the
+// resize, what the guard chose, and seconds.
+#include "bench.h"
+
+#include "core/error.h"
+#include "eval/eval.h"
+#include "io/gltf_io.h"
+#include "pipeline/demo_asset.h"
+#include "pipeline/reparam.h"
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+
+namespace uvpress::cli {
+
+namespace {
+
+nlohmann::ordered_json ratio_vs(const nlohmann::ordered_json& ev, const std::string& vs, std::string* why) {
+  for (const auto& s : ev["savings"])
+    if (s["layout"] == "reparam" && s["vs"] == vs) {
+      if (s["pixel_ratio_at_equal_q"].is_null()) *why += "reparam's and " + vs + "'s curves share no q range; ";
+      return s["pixel_ratio_at_equal_q"];
+    }
+  *why += "no " + vs + " curve; ";
+  return nullptr;
+}
+
+}  // namespace
+
+void add_bench_quality(CLI::App& bench, Globals& g) {
+  auto* cmd = bench.add_subcommand("quality", "reparam against a plain resize on real assets (pixel ratio at equal q)");
+  struct Args {
+    std::vector<std::string> assets;
+    std::string shared = "../shared/assets";
+    pipeline::ReparamOptions reparam;
+    uint32_t resolution = 512;
+    bool only_given = false;
+  };
+  auto a = std::make_shared<Args>();
+  cmd->add_option("--asset", a->assets, "More glTF assets to measure (repeatable)");
+  cmd->add_flag("--only", a->only_given, "Measure only the --asset files (not the demo and the shared assets)");
+  cmd->add_option("--shared", a->shared, "Folder of the shared sample assets")->capture_default_str();
+  cmd->add_option("--cost", a->reparam.cost, "reparam --cost")->capture_default_str()->check(CLI::Range(0.001, 1.0));
+  cmd->add_option("--evaluations", a->reparam.triangle.evaluations, "reparam --evaluations")->capture_default_str()->check(CLI::Range(11, 1000));
+  cmd->add_flag("--early-stop", a->reparam.triangle.early_stop, "reparam --early-stop");
+  cmd->add_option("--resolution", a->resolution, "eval view size, pixels")->capture_default_str()->check(CLI::Range(64u, 1024u));
+  cmd->callback([&g, a] {
+    g.action = [&g, a] {
+      std::vector<std::pair<std::string, std::string>> inputs;  // name, path ("" = the demo)
+      if (!a->only_given) {
+        inputs.push_back({"demo", ""});
+        for (const char* rel : {"Duck/glTF/Duck.gltf", "Fox/glTF/Fox.gltf", "CesiumMilkTruck/glTF/CesiumMilkTruck.gltf",
+                                "MultiUVTest/glTF/MultiUVTest.gltf"})
+          inputs.push_back({std::filesystem::path(rel).stem().string(), a->shared + "/" + rel});
+      }
+      for (const auto& p : a->assets) inputs.push_back({std::filesystem::path(p).stem().string(), p});
+      auto engine = g.make_engine();
+      const auto d = engine->device();
+      for (const auto& [name, path] : inputs) {
+        nlohmann::ordered_json line = {{"bench", "quality"}, {"asset", name}, {"backend", d.backend}, {"device", d.name}};
+        if (!path.empty() && !std::filesystem::exists(path)) {
+          line["skipped"] = "not found: " + path;
+          std::printf("%s\n", line.dump().c_str());
+          continue;
+        }
+        const auto t0 = std::chrono::steady_clock::now();
+        const io::GltfFile input = path.empty() ? pipeline::make_demo_asset() : io::load_gltf(path, g.refs());
+        io::GltfFile written = input, layout;
+        auto report = pipeline::reparam(written, *engine, a->reparam, {}, &layout);
+        line["chosen"] = report["chosen"];
+        line["layout"] = report["layout"];
+        line["cost_ratio"] = report["cost_ratio"];
+        const auto& guard = report["guard"];
+        line["q_reparam"] = guard.is_object() ? guard["q_reparam"] : nlohmann::ordered_json(nullptr);
+        line["q_resize"] = guard.is_object() ? guard["q_resize"] : nlohmann::ordered_json(nullptr);
+        std::string why;
+        if (report["chosen"] == "untouched") {
+          line["ratio_vs_resize"] = nullptr, line["ratio_vs_isometric"] = nullptr;
+          why = "reparam left every layout untouched";
+        } else {
+          eval::EvalOptions eo;
+          eo.resolution = a->resolution;
+          eo.flatten = true;
+          eo.artifacts = false;
+          auto ev = eval::evaluate(input, {{"reparam", &layout}}, *engine, eo);
+          line["ratio_vs_resize"] = ratio_vs(ev, "input", &why);
+          line["ratio_vs_isometric"] = ratio_vs(ev, "flatten", &why);
+          line["input_resize"] = ev.value("input_resize", "");
+        }
+        if (!why.empty()) line["why_null"] = why;
+        line["candidates"] = report["candidates"];
+        line["triangles"] = report["triangles_optimized"];
+        line["seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        std::printf("%s\n", line.dump().c_str());
+        std::fflush(stdout);
+      }
+      return 0;
+    };
+  });
+}
+
+}  // namespace uvpress::cli
