@@ -5,6 +5,7 @@
 #include "cpu/gmsd.h"
 #include "layout.h"
 #include "perceptual/triangle_view.h"
+#include "resize.h"
 
 #include <algorithm>
 #include <chrono>
@@ -75,56 +76,11 @@ std::vector<std::array<float, 16>> dodecahedron_cameras(const float* p, size_t n
 
 namespace {
 
-// Per output index: (source index, weight) with weights summing to 1.
-std::vector<std::vector<std::pair<uint32_t, double>>> axis_weights(uint32_t from, uint32_t to) {
-  std::vector<std::vector<std::pair<uint32_t, double>>> w(to);
-  const double scale = double(from) / to;
-  for (uint32_t k = 0; k < to; ++k) {
-    if (from == to) {
-      w[k] = {{k, 1.0}};
-    } else if (to < from) {
-      const double a = k * scale, b = (k + 1) * scale;
-      for (uint32_t i = uint32_t(std::floor(a)); i < std::min<uint32_t>(from, uint32_t(std::ceil(b))); ++i) {
-        const double overlap = std::min(b, i + 1.0) - std::max(a, double(i));
-        if (overlap > 0) w[k].push_back({i, overlap / scale});
-      }
-    } else {
-      const double s = std::clamp((k + 0.5) * scale - 0.5, 0.0, double(from - 1));
-      const uint32_t i0 = uint32_t(std::floor(s)), i1 = std::min(i0 + 1, from - 1);
-      const double f = s - i0;
-      w[k] = {{i0, 1 - f}, {i1, f}};
-    }
-  }
-  return w;
-}
-
 double seconds_since(std::chrono::steady_clock::time_point t) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
 }
 
 }  // namespace
-
-Image resize_area(const Image& in, uint32_t W, uint32_t H) {
-  if (W == in.width && H == in.height) return in;
-  const uint32_t C = in.channels;
-  auto wx = axis_weights(in.width, W), wy = axis_weights(in.height, H);
-  std::vector<double> rows(size_t(in.height) * W * C, 0.0);
-  for (uint32_t j = 0; j < in.height; ++j)
-    for (uint32_t i = 0; i < W; ++i)
-      for (auto [src, w] : wx[i])
-        for (uint32_t c = 0; c < C; ++c) rows[(size_t(j) * W + i) * C + c] += w * in.pixels[(size_t(j) * in.width + src) * C + c];
-  Image out;
-  out.width = W, out.height = H, out.channels = C, out.bits = in.bits;
-  out.pixels.assign(size_t(W) * H * C, 0.0f);
-  for (uint32_t j = 0; j < H; ++j)
-    for (uint32_t i = 0; i < W; ++i)
-      for (uint32_t c = 0; c < C; ++c) {
-        double s = 0;
-        for (auto [src, w] : wy[j]) s += w * rows[(size_t(src) * W + i) * C + c];
-        out.pixels[(size_t(j) * W + i) * C + c] = float(s);
-      }
-  return out;
-}
 
 Savings pixel_ratio_at_equal_q(const std::vector<std::pair<double, double>>& a,
                                const std::vector<std::pair<double, double>>& b) {
@@ -209,13 +165,65 @@ std::vector<float> gmsd_views(engine::Engine& engine, const std::vector<float>& 
   return out;
 }
 
-// Texture size of `m` at relative cost c_r: W H uv_area = c_r c_ref, aspect of `full`.
-std::pair<uint32_t, uint32_t> size_at(double c_r, double c_ref, double uv_area, double aspect) {
-  const double texels = c_r * c_ref / uv_area;
-  const double w = std::sqrt(texels * aspect);
+// Texture size at relative cost c_r in image texels: W H = c_r ref_texels, `aspect` kept.
+std::pair<uint32_t, uint32_t> size_at(double c_r, double ref_texels, double aspect) {
+  const double w = std::sqrt(c_r * ref_texels * aspect);
   const uint32_t W = uint32_t(std::clamp(std::round(w), 1.0, 16384.0));
   const uint32_t H = uint32_t(std::clamp(std::round(w / aspect), 1.0, 16384.0));
   return {W, H};
+}
+
+// Mean GMSD of `m` textured with `texture` against the reference views (per view in
+// *per_view): the one place eval turns a texture into q.
+double score_views(engine::Engine& engine, const LayoutMesh& m, const Image& texture,
+                   const std::vector<std::array<float, 16>>& cameras, uint32_t res, const std::vector<float>& ref_views,
+                   Timing& timing, std::vector<float>* per_view = nullptr) {
+  const auto views = luminance_render(engine, m, texture, cameras, res, timing);
+  auto g = gmsd_views(engine, ref_views, views, res, cameras.size(), timing);
+  double q = 0;
+  for (float x : g) q += x;
+  q /= double(g.size());
+  if (per_view) *per_view = std::move(g);
+  return q;
+}
+
+// What every evaluation of one reference shares: its layout, the cameras, its views and
+// its costs (image texels, and the paper's texels under the charts).
+struct Setup {
+  LayoutMesh ref;
+  std::vector<std::array<float, 16>> cameras;
+  std::vector<float> ref_views;
+  double image_texels = 0, chart_texels = 0;
+  double radius = 0;  // the largest extent of the bounding box
+};
+
+Setup set_up(const io::GltfFile& reference, engine::Engine& engine, const EvalOptions& o, Timing& timing) {
+  if (o.cost_grid.empty()) throw InputError(reference.path, "empty cost grid");
+  for (double c : o.cost_grid)
+    if (!(c > 0 && c <= 4)) throw InputError(reference.path, "cost grid values must lie in (0, 4]");
+  if (o.resolution < 8 || o.resolution > 1024) throw InputError(reference.path, "resolution must be 8..1024");
+  Setup s;
+  s.ref = detail::extract_layout(reference, "input");
+  const LayoutMesh& ref = s.ref;
+  s.cameras = dodecahedron_cameras(ref.positions.data(), ref.positions.size() / 3, o.fov_degrees);
+  s.image_texels = double(ref.full.width) * ref.full.height;
+  s.chart_texels = s.image_texels * ref.uv_area;
+  double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
+  for (size_t v = 0; v < ref.positions.size() / 3; ++v)
+    for (int d = 0; d < 3; ++d) lo[d] = std::min(lo[d], double(ref.positions[3 * v + size_t(d)])), hi[d] = std::max(hi[d], double(ref.positions[3 * v + size_t(d)]));
+  for (int d = 0; d < 3; ++d) s.radius = std::max(s.radius, hi[d] - lo[d]);
+  s.ref_views = luminance_render(engine, ref, ref.full, s.cameras, o.resolution, timing);
+  return s;
+}
+
+// A layout as written: its own texture at its real size, its own sampler.
+Scored score_own(engine::Engine& engine, const Setup& s, const LayoutMesh& own, uint32_t res, Timing& timing) {
+  Scored r;
+  const double texels = double(own.full.width) * own.full.height;
+  r.c_r = texels / s.image_texels;
+  r.c_r_chart = texels * own.uv_area / s.chart_texels;
+  r.q = score_views(engine, own, own.full, s.cameras, res, s.ref_views, timing);
+  return r;
 }
 
 // A 5 x 4 sheet of RGB renders (values clamped to [0,1]).
@@ -290,36 +298,56 @@ Image uv_plot(const LayoutMesh& m, double aspect, double* spread) {
 
 }  // namespace
 
+Scored score_as_written(const io::GltfFile& reference, const io::GltfFile& candidate, engine::Engine& engine,
+                        const EvalOptions& o) {
+  Timing timing;
+  const Setup s = set_up(reference, engine, o, timing);
+  return score_own(engine, s, detail::extract_layout(candidate, "candidate"), o.resolution, timing);
+}
+
 nlohmann::ordered_json evaluate(const io::GltfFile& reference, const std::vector<LayoutInput>& others,
                                 engine::Engine& engine, const EvalOptions& o, EvalArtifacts* artifacts,
                                 const Progress& progress) {
   const auto t_start = std::chrono::steady_clock::now();
-  if (o.cost_grid.empty()) throw InputError(reference.path, "empty cost grid");
-  for (double c : o.cost_grid)
-    if (!(c > 0 && c <= 4)) throw InputError(reference.path, "cost grid values must lie in (0, 4]");
-  if (o.resolution < 8 || o.resolution > 1024) throw InputError(reference.path, "resolution must be 8..1024");
   Timing timing;
-  LayoutMesh ref = detail::extract_layout(reference, "input");
-  const auto cameras = dodecahedron_cameras(ref.positions.data(), ref.positions.size() / 3, o.fov_degrees);
+  const Setup s = set_up(reference, engine, o, timing);
+  const LayoutMesh& ref = s.ref;
+  const auto& cameras = s.cameras;
   const uint32_t res = o.resolution;
-  const double c_ref = double(ref.full.width) * ref.full.height * ref.uv_area;
-  double radius = 0;
-  {
-    double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
-    for (size_t v = 0; v < ref.positions.size() / 3; ++v)
-      for (int d = 0; d < 3; ++d) lo[d] = std::min(lo[d], double(ref.positions[3 * v + size_t(d)])), hi[d] = std::max(hi[d], double(ref.positions[3 * v + size_t(d)]));
-    for (int d = 0; d < 3; ++d) radius = std::max(radius, hi[d] - lo[d]);
-  }
-  const std::vector<float> ref_views = luminance_render(engine, ref, ref.full, cameras, res, timing);
 
   // The layouts with their full textures and aspects.
   struct Entry {
     LayoutMesh mesh;
     double aspect = 1;
+    bool users_resize = false;  // the input: resized as users' tools do, not area-filtered
+    bool scored_as_written = false;
+    Scored as_written;
+    uint32_t written_size[2] = {0, 0};
     nlohmann::ordered_json extra = nlohmann::ordered_json::object();
   };
   std::vector<Entry> layouts;
-  layouts.push_back({ref, double(ref.full.width) / ref.full.height, {}});
+  {
+    Entry e;
+    e.mesh = ref, e.aspect = double(ref.full.width) / ref.full.height, e.users_resize = true;
+    layouts.push_back(std::move(e));
+  }
+  auto rebake_into = [&](Entry& e) {
+    auto [W, H] = size_at(1.0, s.image_texels, e.aspect);
+    const auto t0 = std::chrono::steady_clock::now();
+    std::string method;
+    e.mesh.full = detail::rebake_from(ref, e.mesh, W, H, &method);
+    timing.textures += seconds_since(t0);
+    e.mesh.texture_source = "rebaked";
+    e.extra["rebake"] = method;
+  };
+  if (o.paper_baseline) {
+    // The paper's protocol (§5.1): the input layout re-baked and area-filtered like every
+    // other layout, so its losses are the ones the others pay too.
+    Entry e;
+    e.mesh = ref, e.mesh.name = "input-rebaked", e.aspect = double(ref.full.width) / ref.full.height;
+    rebake_into(e);
+    layouts.push_back(std::move(e));
+  }
   for (const auto& other : others) {
     Entry e;
     e.mesh = detail::extract_layout(*other.file, other.name);
@@ -328,14 +356,13 @@ nlohmann::ordered_json evaluate(const io::GltfFile& reference, const std::vector
                                              std::to_string(e.mesh.indices.size() / 3) + " textured triangles, not " +
                                              std::to_string(ref.indices.size() / 3) + ")");
     e.aspect = double(e.mesh.full.width) / e.mesh.full.height;
-    if (detail::same_triangles(ref, e.mesh, 1e-5 * radius)) {
-      auto [W, H] = size_at(1.0, c_ref, e.mesh.uv_area, e.aspect);
-      const auto t0 = std::chrono::steady_clock::now();
-      std::string method;
-      e.mesh.full = detail::rebake_from(ref, e.mesh, W, H, &method);
-      timing.textures += seconds_since(t0);
-      e.mesh.texture_source = "rebaked";
-      e.extra["rebake"] = method;
+    // What the user will see: the file's own texture at its real size, its own sampler.
+    if (progress) progress("as written " + e.mesh.name, 0, 1);
+    e.as_written = score_own(engine, s, e.mesh, res, timing);
+    e.scored_as_written = true;
+    e.written_size[0] = e.mesh.full.width, e.written_size[1] = e.mesh.full.height;
+    if (detail::same_triangles(ref, e.mesh, 1e-5 * s.radius)) {
+      rebake_into(e);
     } else {
       e.mesh.texture_source = "own";
     }
@@ -346,18 +373,14 @@ nlohmann::ordered_json evaluate(const io::GltfFile& reference, const std::vector
     if (progress) progress("flatten", 0, 1);
     Entry e;
     e.mesh = ref;
-    e.mesh.name = "flatten", e.mesh.file = "", e.mesh.texture_source = "rebaked";
+    e.mesh.name = "flatten", e.mesh.file = "";
     nlohmann::ordered_json info;
     e.mesh.uvs = detail::isometric_uvs(ref, &e.aspect, &info);
     e.mesh.uv_area = 0;
     for (size_t t = 0; t < e.mesh.indices.size() / 3; ++t) e.mesh.uv_area += detail::uv_area(e.mesh.uvs, e.mesh.indices, t);
     e.mesh.repeat = false;
-    auto [W, H] = size_at(1.0, c_ref, e.mesh.uv_area, e.aspect);
-    const auto t0 = std::chrono::steady_clock::now();
-    std::string method;
-    e.mesh.full = detail::rebake_from(ref, e.mesh, W, H, &method);
-    timing.textures += seconds_since(t0);
-    e.extra = {{"flatten", info}, {"rebake", method}};
+    e.extra["flatten"] = info;
+    rebake_into(e);
     layouts.push_back(std::move(e));
   }
 
@@ -381,14 +404,48 @@ nlohmann::ordered_json evaluate(const io::GltfFile& reference, const std::vector
   report["fov_degrees"] = o.fov_degrees;
   report["texture_filter"] = "bilinear (no mip-maps)";
   report["triangles"] = ref.indices.size() / 3;
-  report["reference"] = {{"file", reference.path}, {"image", ref.image}, {"width", ref.full.width},
-                         {"height", ref.full.height}, {"uv_area", ref.uv_area}, {"cost_texels", c_ref}};
+  report["reference"] = {{"file", reference.path}, {"image", ref.image},           {"width", ref.full.width},
+                         {"height", ref.full.height}, {"uv_area", ref.uv_area}, {"image_texels", s.image_texels},
+                         {"chart_texels", s.chart_texels}};
+  report["cost_measure"] = "image_texels";
   report["cost_grid"] = o.cost_grid;
   report["contact_c_r"] = contact;
+
+  using Resize = std::function<Image(const Image&, uint32_t, uint32_t)>;
+  const Resize area = [](const Image& i, uint32_t w, uint32_t h) { return resize_area(i, w, h); };
+  const Resize lanczos_srgb = [](const Image& i, uint32_t w, uint32_t h) { return resize_lanczos3(i, w, h, false); };
+  const Resize lanczos_linear = [](const Image& i, uint32_t w, uint32_t h) { return resize_lanczos3(i, w, h, true); };
+  struct Curve {
+    nlohmann::ordered_json points = nlohmann::ordered_json::array();
+    std::vector<std::pair<double, double>> cq;  // (c_r, q) by increasing cost
+    double mean_log_q = 0;
+  };
+  size_t step = 0;
+  const size_t steps = (layouts.size() + 1) * o.cost_grid.size();
+  auto run_curve = [&](const LayoutMesh& m, double aspect, const Resize& resize) {
+    Curve c;
+    for (double c_r : o.cost_grid) {
+      if (progress) progress("curve " + m.name, step, steps);
+      ++step;
+      auto [W, H] = size_at(c_r, s.image_texels, aspect);
+      const auto t0 = std::chrono::steady_clock::now();
+      const Image tex = resize(m.full, W, H);
+      timing.textures += seconds_since(t0);
+      std::vector<float> g;
+      const double q = score_views(engine, m, tex, cameras, res, s.ref_views, timing, &g);
+      const double actual = double(W) * H / s.image_texels;
+      const double chart = double(W) * H * m.uv_area / s.chart_texels;
+      c.points.push_back({{"c_r", c_r}, {"c_r_actual", actual}, {"c_r_chart", chart}, {"r", W}, {"width", W},
+                          {"height", H}, {"q", q}, {"q_views", g}});
+      c.cq.push_back({actual, q});
+      c.mean_log_q += std::log(std::max(q, 1e-9)) / double(o.cost_grid.size());  // q = 0: a perfect copy
+    }
+    std::sort(c.cq.begin(), c.cq.end());
+    return c;
+  };
+
   nlohmann::ordered_json out_layouts = nlohmann::ordered_json::array();
   std::vector<std::vector<std::pair<double, double>>> curves;
-  size_t step = 0;
-  const size_t steps = layouts.size() * o.cost_grid.size();
   for (auto& e : layouts) {
     const LayoutMesh& m = e.mesh;
     nlohmann::ordered_json L;
@@ -401,58 +458,62 @@ nlohmann::ordered_json evaluate(const io::GltfFile& reference, const std::vector
     Image plot = uv_plot(m, e.aspect, &spread);
     L["texel_density_spread_log2"] = spread;
     for (auto& [k, v] : e.extra.items()) L[k] = v;
-    nlohmann::ordered_json curve = nlohmann::ordered_json::array();
-    std::vector<std::pair<double, double>> points;
-    for (double c_r : o.cost_grid) {
-      if (progress) progress("curve " + m.name, step, steps);
-      ++step;
-      auto [W, H] = size_at(c_r, c_ref, m.uv_area, e.aspect);
-      auto t0 = std::chrono::steady_clock::now();
-      Image tex = resize_area(m.full, W, H);
-      timing.textures += seconds_since(t0);
-      const auto views = luminance_render(engine, m, tex, cameras, res, timing);
-      const auto g = gmsd_views(engine, ref_views, views, res, cameras.size(), timing);
-      double q = 0;
-      for (float x : g) q += x;
-      q /= double(g.size());
-      const double actual = double(W) * H * m.uv_area / c_ref;
-      curve.push_back({{"c_r", c_r}, {"c_r_actual", actual}, {"r", W}, {"width", W}, {"height", H}, {"q", q},
-                       {"q_views", g}});
-      points.push_back({actual, q});
-      if (artifacts && o.artifacts && c_r == contact) {
-        LayoutArtifacts a;
-        a.name = m.name;
-        a.contact = contact_sheet(engine, m, tex, cameras, thumb);
-        a.uv_plot = plot;
-        artifacts->layouts.push_back(std::move(a));
-      }
+    Curve curve;
+    const Resize* resize = &area;
+    if (e.users_resize) {
+      // The baseline a user gets from a one-line resize: Lanczos-3 in stored sRGB values
+      // (most tools) or in linear light (careful ones), whichever scores better over the
+      // grid, so a layout that beats it beats both.
+      Curve srgb = run_curve(m, e.aspect, lanczos_srgb), linear = run_curve(m, e.aspect, lanczos_linear);
+      const bool use_linear = linear.mean_log_q < srgb.mean_log_q;
+      const std::string name = use_linear ? "lanczos3-linear" : "lanczos3-srgb";
+      report["input_resize"] = name;
+      L["resize"] = name;
+      L["resize_mean_log_q"] = {{"lanczos3-srgb", srgb.mean_log_q}, {"lanczos3-linear", linear.mean_log_q}};
+      curve = use_linear ? std::move(linear) : std::move(srgb);
+      resize = use_linear ? &lanczos_linear : &lanczos_srgb;
+    } else {
+      curve = run_curve(m, e.aspect, area);
+      L["resize"] = "area";
     }
-    std::sort(points.begin(), points.end());
-    curves.push_back(points);
-    L["curve"] = std::move(curve);
+    if (e.scored_as_written)
+      L["as_written"] = {{"c_r", e.as_written.c_r}, {"c_r_chart", e.as_written.c_r_chart}, {"q", e.as_written.q},
+                         {"width", e.written_size[0]}, {"height", e.written_size[1]}};
+    L["curve"] = std::move(curve.points);
+    curves.push_back(std::move(curve.cq));
+    if (artifacts && o.artifacts) {
+      auto [W, H] = size_at(contact, s.image_texels, e.aspect);
+      LayoutArtifacts a;
+      a.name = m.name;
+      a.contact = contact_sheet(engine, m, (*resize)(m.full, W, H), cameras, thumb);
+      a.uv_plot = plot;
+      artifacts->layouts.push_back(std::move(a));
+    }
     out_layouts.push_back(std::move(L));
   }
   report["layouts"] = std::move(out_layouts);
 
-  // Savings: every layout against the input's, and against the isometric one when present.
+  // Savings: every layout against the input's, and against the paper's baseline and the
+  // isometric layout when present.
   nlohmann::ordered_json savings = nlohmann::ordered_json::array();
   std::vector<size_t> bases = {0};
+  if (o.paper_baseline) bases.push_back(1);
   if (o.flatten) bases.push_back(layouts.size() - 1);
   for (size_t b : bases)
     for (size_t a = 0; a < layouts.size(); ++a) {
       if (a == b || (b != 0 && a == 0)) continue;
-      Savings s = pixel_ratio_at_equal_q(curves[a], curves[b]);
+      Savings sv = pixel_ratio_at_equal_q(curves[a], curves[b]);
       nlohmann::ordered_json row = {{"layout", layouts[a].mesh.name}, {"vs", layouts[b].mesh.name}};
-      if (s.points) {
-        row["pixel_ratio_at_equal_q"] = s.ratio;
-        row["pixel_savings"] = 1 - s.ratio;
-        row["q_range"] = {s.q_lo, s.q_hi};
+      if (sv.points) {
+        row["pixel_ratio_at_equal_q"] = sv.ratio;
+        row["pixel_savings"] = 1 - sv.ratio;
+        row["q_range"] = {sv.q_lo, sv.q_hi};
       } else {
         row["pixel_ratio_at_equal_q"] = nullptr;
         row["pixel_savings"] = nullptr;
         row["q_range"] = nullptr;
       }
-      row["points"] = s.points;
+      row["points"] = sv.points;
       savings.push_back(std::move(row));
     }
   report["savings"] = std::move(savings);

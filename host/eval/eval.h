@@ -6,26 +6,36 @@
 //   sphere just inside the frame), square images of `resolution` pixels.
 // - Renders: engine->render_mesh (CPU backend = oracle, Vulkan kernel render_mesh.comp).
 //   Texture filter: bilinear by hand in fp32, no mip-maps. At c_r <= 1 the layouts'
-//   textures have at most the reference's texel density, and the reference is rendered
+//   textures have about the reference's texel density or less, and the reference is rendered
 //   from the same views with the same filter, so magnification dominates; mip-maps would
 //   blur both images alike and hide exactly the texel-density differences eval measures.
 // - Reference: the input (first file) layout with its full texture, luminance.
-// - Layouts: "input" (the reference's own UVs), every other file (a glTF of the same mesh:
-//   reparam's output, an xatlas or Blender layout), and with `flatten` the isometric
-//   layout ("flatten": charts from the input's UV seams flattened by host/flatten's
-//   progressive solver, charts that are not disks keep their input UVs scaled to their 3-D
-//   area, laid out on shelves at one scale).
+// - Layouts: "input" (the reference's own UVs), with `paper_baseline` "input-rebaked" (the
+//   same UVs, re-baked like every other layout: the paper's protocol, so figures can be set
+//   beside the paper's), every other file (a glTF of the same mesh: reparam's output, an
+//   xatlas or Blender layout), and with `flatten` the isometric layout ("flatten": charts
+//   from the input's UV seams flattened by host/flatten's progressive solver, charts that
+//   are not disks keep their input UVs scaled to their 3-D area, laid out on shelves at one
+//   scale).
 // - Each layout's full texture: the input's own; for every other layout, the reference
 //   texture re-baked into its UVs (atlas::rebake when the tree has it, else a plain
 //   bilinear bake with a dilated gutter) at the size where c_r = 1, when its triangles
 //   correspond one to one with the reference's (same count, same corner positions);
 //   otherwise the file's own texture.
-// - Cost (eq. 20-21): c = W H sum|uv triangle area| (texels under the charts), c_r relative
-//   to the input layout with its full texture. For each c_r of the grid the layout's
-//   texture size keeps its aspect with W H = c_r c_ref / uv_area (rounded), the full
-//   texture is resized to it with an exact area (box) filter (bilinear when enlarging),
-//   the 20 views are rendered and q = mean GMSD against the reference views (eq. 22-23).
-//   GMSD: engine->gmsd for images up to 64 x 64, else engine/cpu/gmsd.h (fp32).
+// - Cost: image texels, what users pay for (every texel of the image in VRAM and on the
+//   wire): c_r = W H / (W_ref H_ref), the reference's driving image. Each curve point also
+//   carries the paper's c_r_chart (eq. 20-21: W H sum|uv triangle area|, texels under the
+//   charts, relative to the reference's), which cannot see packing. For each c_r of the
+//   grid the layout's texture keeps its aspect with W H = c_r W_ref H_ref (rounded).
+// - Resize to that size: the input's texture as users' tools resize it, Lanczos-3
+//   (resize.h), in stored sRGB values and in linear light, both evaluated, the one with the
+//   lower mean log q over the grid kept (report: input_resize), so the baseline is the
+//   strongest a user gets in one line; every other layout's full texture with the exact
+//   area (box) filter (bilinear when enlarging), the paper's protocol. Then the 20 views
+//   are rendered and q = mean GMSD against the reference views (eq. 22-23). GMSD:
+//   engine->gmsd for images up to 64 x 64, else engine/cpu/gmsd.h (fp32).
+// - As written: every other file is also scored with its own texture at its real size and
+//   its own sampler (what a user would see), beside its curve (report: as_written).
 // - Savings: for a layout A against B, the ratio c_A(q) / c_B(q) of the costs at which the
 //   two curves reach the same q, log-log interpolated, geometric mean over B's curve
 //   points inside A's q range.
@@ -34,6 +44,7 @@
 #include "core/image.h"
 #include "engine.h"
 #include "io/gltf_io.h"
+#include "resize.h"
 
 #include <nlohmann/json.hpp>
 
@@ -47,6 +58,7 @@ struct EvalOptions {
   std::vector<double> cost_grid = {0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0};
   uint32_t resolution = 512;  // view images, pixels a side (8..1024)
   bool flatten = false;       // add the isometric layout
+  bool paper_baseline = false;  // add "input-rebaked": the input layout re-baked like the others (§5.1)
   double contact_cost = 0;    // c_r of the contact sheet; 0: the grid point nearest 0.25
   uint32_t thumbnail = 160;   // contact sheet view size, pixels
   bool artifacts = true;      // keep what write_html_report needs (contact sheets, UV plots)
@@ -72,18 +84,37 @@ struct EvalArtifacts {
 
 using Progress = std::function<void(const std::string& stage, size_t done, size_t total)>;
 
-// Evaluates the reference's own layout ("input"), each of `others`, and the isometric
-// layout when options.flatten. The report (see README): asset, device, views, resolution,
-// cost_grid, layouts [{name, file, texture, uv_area, full_size, curve [{c_r, c_r_actual, r,
-// width, height, q}]}], savings [{layout, vs, pixel_ratio_at_equal_q, pixel_savings,
-// q_range, points}], contact_c_r, seconds. Throws InputError for assets without a
-// textured triangle primitive or layouts of another mesh.
+// Evaluates the reference's own layout ("input"), "input-rebaked" when
+// options.paper_baseline, each of `others`, and the isometric layout when options.flatten.
+// The report (see README): asset, device, views, resolution, reference {image_texels,
+// chart_texels, ...}, cost_measure ("image_texels"), input_resize ("lanczos3-srgb" |
+// "lanczos3-linear"), cost_grid, layouts [{name, file, texture, resize, uv_area, full_size,
+// as_written {c_r, c_r_chart, q, width, height} (others only), curve [{c_r, c_r_actual,
+// c_r_chart, r, width, height, q, q_views}]}], savings [{layout, vs,
+// pixel_ratio_at_equal_q, pixel_savings, q_range, points}] (image texels), contact_c_r,
+// seconds. Throws InputError for assets without a textured triangle primitive or layouts
+// of another mesh.
 nlohmann::ordered_json evaluate(const io::GltfFile& reference, const std::vector<LayoutInput>& others,
                                 engine::Engine& engine, const EvalOptions& options = {},
                                 EvalArtifacts* artifacts = nullptr, const Progress& progress = {});
 
+// A candidate asset as written, scored against the reference: the 20 views of the
+// candidate rendered with its own driving texture at its real size and its own sampler,
+// q = mean GMSD against the reference's views (options: resolution, fov_degrees), c_r =
+// candidate image texels / reference image texels (c_r_chart: the paper's texels under the
+// charts, relative). The candidate need not share the reference's triangles, only its
+// surface (the cameras frame the reference). reparam's "never worse" guard compares its
+// result with a resized input this way. Throws InputError as evaluate does.
+struct Scored {
+  double c_r = 0, q = 0;
+  double c_r_chart = 0;
+};
+Scored score_as_written(const io::GltfFile& reference, const io::GltfFile& candidate, engine::Engine& engine,
+                        const EvalOptions& options = {});
+
 // Writes DIR/index.html (offline: no scripts, no network), DIR/plot.svg (log q_r against
-// c_r by gnuplot when it is installed; the report says when it is not), DIR/contact-*.png
+// c_r by gnuplot when it is installed, each layout's as-written point marked; the report
+// says when gnuplot is not installed), DIR/contact-*.png
 // and DIR/uv-*.png. All files appear at once (temporaries renamed at the end). Throws
 // InputError(dir, reason).
 void write_html_report(const nlohmann::ordered_json& report, const EvalArtifacts& artifacts, const std::string& dir);
@@ -94,10 +125,6 @@ void write_html_report(const nlohmann::ordered_json& report, const EvalArtifacts
 // bounding sphere of `positions`.
 std::vector<std::array<float, 16>> dodecahedron_cameras(const float* positions, size_t vertex_count,
                                                         double fov_degrees = 30);
-
-// Resizes to width x height: exact box filter per axis when shrinking, linear
-// interpolation (texel centres, clamp) when enlarging; the same size copies exactly.
-Image resize_area(const Image& image, uint32_t width, uint32_t height);
 
 // Savings of curve A against curve B: points (cost, q) by increasing cost. Returns the
 // geometric mean ratio c_A / c_B at equal q and the number of q levels used (0: the

@@ -84,7 +84,16 @@ std::string plot_svg(const nlohmann::ordered_json& report, std::string* why) {
     std::string name = L["name"].get<std::string>();
     for (char& c : name)
       if (c == '\'' || c == '_') c = ' ';
-    plot += (k ? ", " : "") + std::string("'") + data + "' using 1:2 with linespoints lw 2 pt 7 title '" + name + "'";
+    const std::string lt = " lt " + std::to_string(k + 1);
+    plot += (k ? ", " : "") + std::string("'") + data + "' using 1:2 with linespoints" + lt + " lw 2 pt 7 title '" + name + "'";
+    // The file as written (its own texture at its real size): one large square in the
+    // layout's colour, so a reader sees where the asset a user gets sits on its own curve.
+    if (L.contains("as_written") && L["as_written"]["q"].get<double>() > 0) {
+      const std::string point = (tmp / ("w" + std::to_string(k) + ".dat")).string();
+      std::ofstream w(point);
+      w << L["as_written"]["c_r"].get<double>() << " " << L["as_written"]["q"].get<double>() << "\n";
+      plot += ", '" + point + "' using 1:2 with points" + lt + " pt 5 ps 2 title '" + name + " as written'";
+    }
     ++k;
   }
   script << plot << "\n";
@@ -139,7 +148,11 @@ void write_html_report(const nlohmann::ordered_json& report, const EvalArtifacts
     << report["resolution"].get<int>() << " pixels, " << escape(report["texture_filter"].get<std::string>())
     << "; device " << escape(report["device"]["backend"].get<std::string>()) << " ("
     << escape(report["device"]["name"].get<std::string>()) << "). Quality q = mean GMSD against the input layout with its "
-    << "full texture (lower is better); cost c<sub>r</sub> = texels under the charts relative to the input (eq. 20&ndash;21).</p>\n";
+    << "full texture (lower is better); cost c<sub>r</sub> = image texels (W&times;H, what a user pays for) relative to the "
+    << "input's image; the paper's c<sub>r</sub> (texels under the charts, eq. 20&ndash;21) is in each cell's tooltip. "
+    << "The input layout's texture is resized as users' tools do (" << escape(report.value("input_resize", std::string("?")))
+    << ", the stronger of Lanczos-3 in sRGB values and in linear light); other layouts are re-baked and area-filtered. "
+    << "&ldquo;As written&rdquo;: a file's own texture at its real size.</p>\n";
 
   h << "<h2>Pixel savings at equal quality</h2>\n";
   bool any = false;
@@ -161,14 +174,20 @@ void write_html_report(const nlohmann::ordered_json& report, const EvalArtifacts
 
   h << "<table><tr><th class=\"l\">layout</th><th class=\"l\">texture</th>";
   for (const auto& c : report["cost_grid"]) h << "<th>c<sub>r</sub>=" << fmt(c.get<double>(), "%.2f") << "</th>";
-  h << "</tr>\n";
+  h << "<th>as written</th></tr>\n";
   for (const auto& L : report["layouts"]) {
     h << "<tr><td class=\"l\">" << escape(L["name"].get<std::string>()) << "</td><td class=\"l\">"
       << escape(L["texture"].get<std::string>()) << " " << L["full_size"][0].get<int>() << "&times;"
       << L["full_size"][1].get<int>() << "</td>";
     for (const auto& p : L["curve"])
       h << "<td title=\"" << p["width"].get<int>() << "x" << p["height"].get<int>() << ", c_r "
-        << fmt(p["c_r_actual"].get<double>()) << "\">" << fmt(p["q"].get<double>()) << "</td>";
+        << fmt(p["c_r_actual"].get<double>()) << ", chart c_r " << fmt(p.value("c_r_chart", 0.0)) << "\">"
+        << fmt(p["q"].get<double>()) << "</td>";
+    if (L.contains("as_written"))
+      h << "<td>q " << fmt(L["as_written"]["q"].get<double>()) << " at c<sub>r</sub> "
+        << fmt(L["as_written"]["c_r"].get<double>(), "%.3f") << "</td>";
+    else
+      h << "<td></td>";
     h << "</tr>\n";
   }
   h << "</table>\n";

@@ -4,6 +4,7 @@
 #include "core/error.h"
 #include "engine.h"
 #include "eval/eval.h"
+#include "eval/resize.h"
 #include "io/asset.h"
 #include "io/atomic_file.h"
 #include "io/image_io.h"
@@ -13,6 +14,7 @@
 
 #include <cmath>
 #include <cstdlib>
+#include <functional>
 #include <fstream>
 #include <regex>
 #include <sstream>
@@ -155,6 +157,112 @@ TEST_CASE("area resize: identity copies, halving averages 2x2 blocks", "[eval]")
   CHECK(m1 / 6 == Approx(m0 / 8));
 }
 
+namespace {
+
+// An independent Lanczos-3 resize in double precision: separable, output texel k centred
+// at (k + 0.5) s - 0.5 input texels (s = input / output size), kernel stretched by s when
+// shrinking, weights normalized to sum 1, taps outside the image read the edge texel.
+std::vector<double> lanczos3_reference(const std::vector<double>& in, uint32_t w, uint32_t h, uint32_t W, uint32_t H) {
+  auto L = [](double x) {
+    x = std::abs(x);
+    if (x < 1e-12) return 1.0;
+    if (x >= 3) return 0.0;
+    const double px = M_PI * x;
+    return 3 * std::sin(px) * std::sin(px / 3) / (px * px);
+  };
+  auto axis = [&](uint32_t from, uint32_t to) {
+    std::vector<std::vector<std::pair<uint32_t, double>>> taps(to);
+    const double s = double(from) / to, stretch = std::max(1.0, s);
+    for (uint32_t k = 0; k < to; ++k) {
+      const double c = (k + 0.5) * s - 0.5;
+      double sum = 0;
+      for (int i = int(std::floor(c - 3 * stretch)); i <= int(std::ceil(c + 3 * stretch)); ++i) {
+        const double wgt = L((i - c) / stretch);
+        if (wgt != 0) taps[k].push_back({uint32_t(std::clamp(i, 0, int(from) - 1)), wgt}), sum += wgt;
+      }
+      for (auto& t : taps[k]) t.second /= sum;
+    }
+    return taps;
+  };
+  auto tx = axis(w, W), ty = axis(h, H);
+  std::vector<double> rows(size_t(h) * W, 0.0), out(size_t(W) * H, 0.0);
+  for (uint32_t j = 0; j < h; ++j)
+    for (uint32_t i = 0; i < W; ++i)
+      for (auto [x, wgt] : tx[i]) rows[size_t(j) * W + i] += wgt * in[size_t(j) * w + x];
+  for (uint32_t j = 0; j < H; ++j)
+    for (uint32_t i = 0; i < W; ++i)
+      for (auto [y, wgt] : ty[j]) out[size_t(j) * W + i] += wgt * rows[size_t(y) * W + i];
+  return out;
+}
+
+Image grey(uint32_t w, uint32_t h, const std::function<double(uint32_t, uint32_t)>& f) {
+  Image img;
+  img.width = w, img.height = h, img.channels = 1;
+  for (uint32_t j = 0; j < h; ++j)
+    for (uint32_t i = 0; i < w; ++i) img.pixels.push_back(float(f(i, j)));
+  return img;
+}
+
+}  // namespace
+
+TEST_CASE("Lanczos-3 resize matches a double-precision separable Lanczos-3", "[eval]") {
+  // A smooth field with detail near the Nyquist limit, kept inside [0.1, 0.9] so the
+  // clamp to [0,1] never acts.
+  Image img = grey(37, 29, [](uint32_t i, uint32_t j) {
+    return 0.5 + 0.25 * std::sin(0.37 * i + 0.11 * j) + 0.12 * std::cos(1.9 * i * 0.5 + 2.3 * j * 0.4);
+  });
+  std::vector<double> in(img.pixels.begin(), img.pixels.end());
+  for (auto [W, H] : std::vector<std::pair<uint32_t, uint32_t>>{{18, 14}, {11, 20}, {7, 5}, {50, 41}}) {
+    auto ours = eval::resize_lanczos3(img, W, H, false);
+    REQUIRE(ours.width == W);
+    REQUIRE(ours.height == H);
+    REQUIRE(ours.channels == 1);
+    auto ref = lanczos3_reference(in, img.width, img.height, W, H);
+    double worst = 0, box_worst = 0;
+    auto box = eval::resize_area(img, W, H);
+    for (size_t k = 0; k < ref.size(); ++k)
+      worst = std::max(worst, std::abs(ours.pixels[k] - ref[k])), box_worst = std::max(box_worst, std::abs(box.pixels[k] - ref[k]));
+    INFO(W << "x" << H << ": max |ours - reference| = " << worst << ", box filter: " << box_worst);
+    CHECK(worst < 1e-5);  // fp32 against double: measured < 1e-6
+    CHECK(box_worst > 4 * worst);  // the test tells Lanczos from a box filter
+  }
+  // The same size copies exactly.
+  CHECK(eval::resize_lanczos3(img, 37, 29, true).pixels == img.pixels);
+}
+
+TEST_CASE("Lanczos-3 resize: constants stay, linear light averages light, alpha stays linear, rings are clamped", "[eval]") {
+  Image flat;
+  flat.width = 16, flat.height = 12, flat.channels = 4;
+  for (size_t k = 0; k < 16 * 12; ++k) flat.pixels.insert(flat.pixels.end(), {0.2f, 0.6f, 0.9f, 0.7f});
+  for (bool linear : {false, true}) {
+    auto r = eval::resize_lanczos3(flat, 5, 7, linear);
+    for (size_t k = 0; k < r.pixels.size(); ++k) CHECK(r.pixels[k] == Approx(flat.pixels[k % 4]).margin(2e-4));
+  }
+  // Black and white columns two texels wide, halved: the stored values average to 0.5, the
+  // light to 0.5 (sRGB 0.7354); the alpha columns (0 and 1) average to 0.5 either way.
+  Image stripes;
+  stripes.width = 64, stripes.height = 8, stripes.channels = 2;
+  for (uint32_t j = 0; j < 8; ++j)
+    for (uint32_t i = 0; i < 64; ++i) {
+      const float v = (i / 2) % 2 ? 1.0f : 0.0f;
+      stripes.pixels.insert(stripes.pixels.end(), {v, v});
+    }
+  auto quarter = [](const Image& img, bool linear) { return eval::resize_lanczos3(img, img.width / 4, img.height, linear); };
+  auto s = quarter(stripes, false), l = quarter(stripes, true);
+  for (uint32_t i = 2; i < s.width - 2; ++i) {  // away from the edges
+    CHECK(s.at(i, 4, 0) == Approx(0.5).margin(0.02));
+    CHECK(l.at(i, 4, 0) == Approx(0.7354).margin(0.02));
+    CHECK(s.at(i, 4, 1) == Approx(0.5).margin(0.02));
+    CHECK(l.at(i, 4, 1) == Approx(0.5).margin(0.02));
+  }
+  // A hard step rings (values past 0 and 1 before the clamp): nothing leaves [0,1].
+  Image step = grey(32, 4, [](uint32_t i, uint32_t) { return i < 16 ? 0.0 : 1.0; });
+  for (bool linear : {false, true}) {
+    auto r = eval::resize_lanczos3(step, 45, 4, linear);
+    for (float v : r.pixels) CHECK((v >= 0.0f && v <= 1.0f));
+  }
+}
+
 TEST_CASE("savings: a curve reaching every q at half the cost saves half the pixels", "[eval]") {
   std::vector<std::pair<double, double>> b, a;
   for (double c : {0.1, 0.2, 0.4, 0.8}) b.push_back({c, 0.01 / c}), a.push_back({c, 0.005 / c});
@@ -185,6 +293,78 @@ TEST_CASE("eval: a layout against itself at c_r = 1 gives q = 0; q_r falls as c_
   CHECK(curve[0]["q"].get<double>() > curve[1]["q"].get<double>());
   CHECK(curve[1]["q"].get<double>() > curve[2]["q"].get<double>());
   CHECK(curve[0]["c_r_actual"].get<double>() == Approx(0.1).epsilon(0.02));
+  // Costs are image texels; the input is resized as users do, the stronger variant kept.
+  CHECK(r["cost_measure"] == "image_texels");
+  const auto& L = r["layouts"][0];
+  REQUIRE(L["resize"] == r["input_resize"]);
+  const double srgb = L["resize_mean_log_q"]["lanczos3-srgb"], linear = L["resize_mean_log_q"]["lanczos3-linear"];
+  CHECK(L["resize"] == (linear < srgb ? "lanczos3-linear" : "lanczos3-srgb"));
+  CHECK(std::min(srgb, linear) == Approx(std::log(std::max(curve[0]["q"].get<double>(), 1e-9)) / 3 +
+                                         std::log(std::max(curve[1]["q"].get<double>(), 1e-9)) / 3 +
+                                         std::log(std::max(curve[2]["q"].get<double>(), 1e-9)) / 3));
+  CHECK(!L.contains("as_written"));  // the reference is not scored against itself
+}
+
+TEST_CASE("eval: the paper's baseline re-bakes the input layout and area-filters it", "[eval]") {
+  io::GltfFile file = pipeline::make_demo_asset({16, 128});
+  auto cpu = engine::make_cpu_engine({});
+  eval::EvalOptions o;
+  o.resolution = 64;
+  o.cost_grid = {0.25, 1.0};
+  o.artifacts = false;
+  o.paper_baseline = true;
+  auto r = eval::evaluate(file, {}, *cpu, o);
+  REQUIRE(r["layouts"].size() == 2);
+  const auto& L = r["layouts"][1];
+  CHECK(L["name"] == "input-rebaked");
+  CHECK(L["texture"] == "rebaked");
+  CHECK(L["resize"] == "area");
+  CHECK(L["curve"][1]["q"].get<double>() < 1e-3);  // an identity re-bake at the same size is (nearly) exact
+  // At a quarter of the texels the area filter differs from the Lanczos resize.
+  CHECK(L["curve"][0]["q"].get<double>() != r["layouts"][0]["curve"][0]["q"].get<double>());
+  bool vs_paper = false;
+  for (const auto& sv : r["savings"]) vs_paper = vs_paper || sv["vs"] == "input-rebaked";
+  CHECK(!vs_paper);  // nothing but the input to set against it here
+  CHECK(r["savings"].size() == 1);
+}
+
+TEST_CASE("eval: a file is scored as written, at its own texture's real size", "[eval]") {
+  io::GltfFile file = pipeline::make_demo_asset({16, 128});
+  auto cpu = engine::make_cpu_engine({});
+  eval::EvalOptions o;
+  o.resolution = 64;
+  o.cost_grid = {0.25, 1.0};
+  o.artifacts = false;
+  // The same asset: q = 0 at c_r = 1.
+  auto same = eval::score_as_written(file, file, *cpu, o);
+  CHECK(same.c_r == 1.0);
+  CHECK(same.c_r_chart == Approx(1.0));
+  CHECK(same.q <= 1e-12);
+  // The asset with its texture halved a side by a user's resize: c_r = 0.25, and q is the
+  // input curve's point there (up to the 8-bit rounding of the written PNG).
+  auto full = eval::evaluate(file, {}, *cpu, o);
+  const bool linear = full["input_resize"] == "lanczos3-linear";
+  io::GltfFile half = file;
+  half.path = "half.glb";
+  Image img = io::decode_image(file.image_bytes[0], "demo");
+  Image small = eval::resize_lanczos3(img, img.width / 2, img.height / 2, linear);
+  small.bits = 8;
+  half.image_bytes[0] = io::encode_image(small, "png");
+  auto scored = eval::score_as_written(file, half, *cpu, o);
+  CHECK(scored.c_r == Approx(0.25));
+  CHECK(scored.c_r_chart == Approx(0.25));
+  const double q_curve = full["layouts"][0]["curve"][0]["q"].get<double>();
+  REQUIRE(q_curve > 0);
+  CHECK(scored.q == Approx(q_curve).epsilon(0.05));
+  // evaluate reports the same point for the file, beside its re-baked curve.
+  auto r = eval::evaluate(file, {{"half", &half}}, *cpu, o);
+  REQUIRE(r["layouts"].size() == 2);
+  const auto& aw = r["layouts"][1]["as_written"];
+  CHECK(aw["c_r"].get<double>() == Approx(scored.c_r));
+  CHECK(aw["q"].get<double>() == Approx(scored.q).epsilon(1e-9));
+  CHECK(aw["width"] == img.width / 2);
+  // Its curve re-bakes the reference's full texture, so at c_r = 1 it is near lossless.
+  CHECK(r["layouts"][1]["curve"][1]["q"].get<double>() < 0.02);
 }
 
 TEST_CASE("eval: the isometric layout and another file of the same mesh, report and savings", "[eval]") {
@@ -213,6 +393,19 @@ TEST_CASE("eval: the isometric layout and another file of the same mesh, report 
     CHECK(s.contains("vs"));
     CHECK(s.contains("pixel_ratio_at_equal_q"));
   }
+  // Image texels: every layout's texture at c_r = 1 has the reference's W x H; the paper's
+  // chart cost differs by the layouts' UV areas.
+  for (const auto& L : r["layouts"]) {
+    const auto& p = L["curve"][2];
+    CHECK(p["width"].get<double>() * p["height"].get<double>() == Approx(128.0 * 128.0).epsilon(0.02));
+    CHECK(p["c_r_chart"].get<double>() ==
+          Approx(p["c_r_actual"].get<double>() * L["uv_area"].get<double>() / r["reference"]["uv_area"].get<double>()));
+  }
+  CHECK(r["layouts"][2]["uv_area"].get<double>() != Approx(r["layouts"][0]["uv_area"].get<double>()));
+  // The copy as written is the reference itself.
+  CHECK(r["layouts"][1]["as_written"]["c_r"].get<double>() == 1.0);
+  CHECK(r["layouts"][1]["as_written"]["q"].get<double>() <= 1e-12);
+  CHECK(!r["layouts"][2].contains("as_written"));
   CHECK(art.layouts.size() == 3);
   CHECK(art.reference_contact.width == 5 * 32);
 }
@@ -231,14 +424,22 @@ TEST_CASE("eval CLI: report JSON and an HTML report that loads in headless Chrom
   test::Scratch dir("eval-cli");
   io::GltfFile small = pipeline::make_demo_asset({16, 128});
   io::save_gltf(small, (dir / "small.glb").string());
-  auto res = test::run_uvpress("eval " + (dir / "small.glb").string() + " --flatten --device cpu --resolution 64 "
+  io::save_gltf(small, (dir / "other.glb").string());
+  auto res = test::run_uvpress("eval " + (dir / "small.glb").string() + " " + (dir / "other.glb").string() +
+                               " --flatten --paper-baseline --device cpu --resolution 64 "
                                "--cost-grid 0.2,0.5,1 --report " + (dir / "r.json").string() + " --html " +
                                (dir / "html").string());
   INFO(res.err);
   REQUIRE(res.exit_code == 0);
   std::ifstream jf(dir / "r.json");
   auto r = nlohmann::json::parse(jf);
-  for (const char* key : {"asset", "device", "views", "layouts", "savings"}) CHECK(r.contains(key));
+  for (const char* key : {"asset", "device", "views", "layouts", "savings", "cost_measure", "input_resize"})
+    CHECK(r.contains(key));
+  REQUIRE(r["layouts"].size() == 4);  // input, input-rebaked, other, flatten
+  CHECK(r["layouts"][1]["name"] == "input-rebaked");
+  CHECK(r["layouts"][2].contains("as_written"));
+  CHECK(res.out.find("other as written: c_r 1.000") != std::string::npos);
+  CHECK(res.out.find("image texels") != std::string::npos);
   for (const auto& L : r["layouts"]) {
     CHECK(L.contains("name"));
     CHECK(L.contains("file"));

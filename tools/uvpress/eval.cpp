@@ -1,7 +1,8 @@
-// uvpress eval REFERENCE [OTHER ...] [--flatten] [--cost-grid ...] [--resolution N]
-//   [--report FILE.json] [--html DIR]: perceptual quality against pixel cost over 20
-// dodecahedron views (seed paper 001, section 5.1) for the reference's layout, each other
-// glTF of the same mesh, and the isometric (flatten) layout; see host/eval/eval.h.
+// uvpress eval REFERENCE [OTHER ...] [--flatten] [--paper-baseline] [--cost-grid ...]
+//   [--resolution N] [--report FILE.json] [--html DIR]: perceptual quality against pixel
+// cost (image texels) over 20 dodecahedron views (seed paper 001, section 5.1) for the
+// reference's layout (resized as users do), each other glTF of the same mesh (and as
+// written), and the isometric (flatten) layout; see host/eval/eval.h.
 #include "cli.h"
 
 #include "core/error.h"
@@ -30,6 +31,7 @@ void add_eval(CLI::App& app, Globals& g) {
     std::string reference;
     std::vector<std::string> others;
     bool flatten = false;
+    bool paper_baseline = false;
     std::vector<double> grid;
     uint32_t resolution = 512;
     double contact = 0;
@@ -40,6 +42,9 @@ void add_eval(CLI::App& app, Globals& g) {
       ->required();
   cmd->add_option("others", a->others, "Other glTF files of the same mesh (reparam output, xatlas, Blender ...)");
   cmd->add_flag("--flatten", a->flatten, "Also evaluate the isometric layout (charts flattened, packed, re-baked)");
+  cmd->add_flag("--paper-baseline", a->paper_baseline,
+                "Also evaluate the input layout re-baked and area-filtered like the others (the paper's protocol, "
+                "layout \"input-rebaked\")");
   cmd->add_option("--cost-grid", a->grid, "Relative costs c_r, each in (0, 4], comma-separated (default 0.1,0.2,...,1.0)")
       ->delimiter(',')
       ->check(cost_grid_value());
@@ -59,7 +64,7 @@ void add_eval(CLI::App& app, Globals& g) {
         std::string name = std::filesystem::path(a->others[k]).stem().string();
         for (const auto& o : others)
           if (o.name == name) name += "-" + std::to_string(k + 1);
-        if (name == "input" || name == "flatten") name += "-file";
+        if (name == "input" || name == "flatten" || name == "input-rebaked") name += "-file";
         others.push_back({name, &files[k]});
       }
       g.stage("load", t0);
@@ -68,6 +73,7 @@ void add_eval(CLI::App& app, Globals& g) {
       if (!a->grid.empty()) o.cost_grid = a->grid;
       o.resolution = a->resolution;
       o.flatten = a->flatten;
+      o.paper_baseline = a->paper_baseline;
       o.contact_cost = a->contact;
       o.artifacts = !a->html.empty();
       const bool tty = isatty(2);
@@ -81,6 +87,13 @@ void add_eval(CLI::App& app, Globals& g) {
       g.write_report(report);
       g.stage("write", t0);
       std::string summary;
+      for (const auto& L : report["layouts"])
+        if (L.contains("as_written")) {
+          char buf[160];
+          std::snprintf(buf, sizeof buf, "; %s as written: c_r %.3f, q %.4g", L["name"].get<std::string>().c_str(),
+                        L["as_written"]["c_r"].get<double>(), L["as_written"]["q"].get<double>());
+          summary += buf;
+        }
       for (const auto& s : report["savings"])
         if (!s["pixel_ratio_at_equal_q"].is_null()) {
           char buf[160];
@@ -88,9 +101,9 @@ void add_eval(CLI::App& app, Globals& g) {
                         s["vs"].get<std::string>().c_str(), 100 * s["pixel_ratio_at_equal_q"].get<double>());
           summary += buf;
         }
-      std::printf("eval: %zu layouts x %zu costs, %d views at %u px in %.1f s%s\n", report["layouts"].size(),
-                  o.cost_grid.size(), report["views"].get<int>(), o.resolution, report["seconds"]["total"].get<double>(),
-                  summary.c_str());
+      std::printf("eval: %zu layouts x %zu costs (image texels; input resized %s), %d views at %u px in %.1f s%s\n",
+                  report["layouts"].size(), o.cost_grid.size(), report["input_resize"].get<std::string>().c_str(),
+                  report["views"].get<int>(), o.resolution, report["seconds"]["total"].get<double>(), summary.c_str());
       return 0;
     };
   });

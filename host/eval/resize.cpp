@@ -1,0 +1,114 @@
+// Texture resizing as users' tools do (see resize.h).
+#include "resize.h"
+
+#include "atlas/rebake.h"
+
+#include <OpenImageIO/imagebuf.h>
+#include <OpenImageIO/imagebufalgo.h>
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace uvpress::eval {
+
+namespace {
+
+// Per output index: (source index, weight) with weights summing to 1.
+std::vector<std::vector<std::pair<uint32_t, double>>> axis_weights(uint32_t from, uint32_t to) {
+  std::vector<std::vector<std::pair<uint32_t, double>>> w(to);
+  const double scale = double(from) / to;
+  for (uint32_t k = 0; k < to; ++k) {
+    if (from == to) {
+      w[k] = {{k, 1.0}};
+    } else if (to < from) {
+      const double a = k * scale, b = (k + 1) * scale;
+      for (uint32_t i = uint32_t(std::floor(a)); i < std::min<uint32_t>(from, uint32_t(std::ceil(b))); ++i) {
+        const double overlap = std::min(b, i + 1.0) - std::max(a, double(i));
+        if (overlap > 0) w[k].push_back({i, overlap / scale});
+      }
+    } else {
+      const double s = std::clamp((k + 0.5) * scale - 0.5, 0.0, double(from - 1));
+      const uint32_t i0 = uint32_t(std::floor(s)), i1 = std::min(i0 + 1, from - 1);
+      const double f = s - i0;
+      w[k] = {{i0, 1 - f}, {i1, f}};
+    }
+  }
+  return w;
+}
+
+// The channels that carry colour (sRGB-encoded in colour textures): grey or RGB, never
+// alpha (channel 1 of grey+alpha, channel 3 of RGBA).
+bool is_colour(uint32_t c, uint32_t channels) { return channels <= 2 ? c == 0 : c < 3; }
+
+// sRGB decode through a table for the values 8- and 16-bit files hold (k / 65535 covers
+// k / 255 exactly); the formula for anything else. Decoding every texel by std::pow would
+// cost more than the resize itself on a 4K texture.
+float decode(float v) {
+  static const std::vector<float> table = [] {
+    std::vector<float> t(65536);
+    for (int i = 0; i < 65536; ++i) t[size_t(i)] = atlas::srgb_to_linear(float(double(i) / 65535.0));
+    return t;
+  }();
+  const double k = std::round(double(v) * 65535.0);
+  if (k >= 0 && k <= 65535 && std::abs(double(v) * 65535.0 - k) < 1e-3) return table[size_t(k)];
+  return atlas::srgb_to_linear(v);
+}
+
+}  // namespace
+
+Image resize_area(const Image& in, uint32_t W, uint32_t H) {
+  if (W == in.width && H == in.height) return in;
+  const uint32_t C = in.channels;
+  auto wx = axis_weights(in.width, W), wy = axis_weights(in.height, H);
+  std::vector<double> rows(size_t(in.height) * W * C, 0.0);
+  for (uint32_t j = 0; j < in.height; ++j)
+    for (uint32_t i = 0; i < W; ++i)
+      for (auto [src, w] : wx[i])
+        for (uint32_t c = 0; c < C; ++c) rows[(size_t(j) * W + i) * C + c] += w * in.pixels[(size_t(j) * in.width + src) * C + c];
+  Image out;
+  out.width = W, out.height = H, out.channels = C, out.bits = in.bits;
+  out.pixels.assign(size_t(W) * H * C, 0.0f);
+  for (uint32_t j = 0; j < H; ++j)
+    for (uint32_t i = 0; i < W; ++i)
+      for (uint32_t c = 0; c < C; ++c) {
+        double s = 0;
+        for (auto [src, w] : wy[j]) s += w * rows[(size_t(src) * W + i) * C + c];
+        out.pixels[(size_t(j) * W + i) * C + c] = float(s);
+      }
+  return out;
+}
+
+Image resize_lanczos3(const Image& in, uint32_t W, uint32_t H, bool linear_light) {
+  if (W == in.width && H == in.height) return in;
+  if (W == 0 || H == 0 || in.width == 0 || in.height == 0 || in.channels == 0)
+    throw std::runtime_error("resize_lanczos3: empty image or size");
+  const uint32_t C = in.channels;
+  std::vector<float> src = in.pixels;
+  if (linear_light)
+    for (size_t k = 0; k < src.size(); ++k)
+      if (is_colour(uint32_t(k % C), C)) src[k] = decode(src[k]);
+  // OIIO wraps our buffer (no copy) and writes into a float buffer of the new size.
+  const OIIO::ImageSpec in_spec(int(in.width), int(in.height), int(C), OIIO::TypeDesc::FLOAT);
+  const OIIO::ImageBuf source(in_spec, src.data());
+  const OIIO::ImageSpec out_spec(int(W), int(H), int(C), OIIO::TypeDesc::FLOAT);
+  OIIO::ImageBuf dest(out_spec);
+  if (!OIIO::ImageBufAlgo::resize(dest, source, "lanczos3"))
+    throw std::runtime_error("resize_lanczos3: OpenImageIO: " + dest.geterror());
+  Image out;
+  out.width = W, out.height = H, out.channels = C, out.bits = in.bits;
+  out.pixels.resize(size_t(W) * H * C);
+  if (!dest.get_pixels(OIIO::ROI(0, int(W), 0, int(H), 0, 1, 0, int(C)), OIIO::TypeDesc::FLOAT, out.pixels.data()))
+    throw std::runtime_error("resize_lanczos3: OpenImageIO: " + dest.geterror());
+  for (size_t k = 0; k < out.pixels.size(); ++k) {
+    float v = std::clamp(out.pixels[k], 0.0f, 1.0f);  // Lanczos rings past the range at edges
+    if (linear_light && is_colour(uint32_t(k % C), C)) v = atlas::linear_to_srgb(v);
+    out.pixels[k] = v;
+  }
+  return out;
+}
+
+}  // namespace uvpress::eval
