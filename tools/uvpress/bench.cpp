@@ -34,6 +34,7 @@ void add_bench(CLI::App& app, Globals& g) {
   add_bench_flatten(*bench, g);
   add_bench_eval(*bench, g);
   add_bench_rebake(*bench, g);
+  add_bench_rebake_lsq(*bench, g);
 }
 
 }  // namespace uvpress::cli
