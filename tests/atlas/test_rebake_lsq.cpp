@@ -213,7 +213,7 @@ TEST_CASE("rebake_lsq: a 0.7 downscale loses no more than the area filter", "[at
   }
 }
 
-TEST_CASE("rebake_lsq: normal maps keep the area bake; mismatched inputs throw", "[atlas][lsq]") {
+TEST_CASE("rebake_lsq: normal maps keep the area bake, mismatched inputs throw", "[atlas][lsq]") {
   const Image src = detailed_image(32, 32, 3);
   const Layout L = grid_layout(4, 24, 2, 32, 32, 30, 1.0, 32, 32);
   RebakeOptions o;
