@@ -13,9 +13,7 @@
 
 namespace uvpress::engine {
 
-namespace {
-
-int wrap(int i, int n, int mode) {
+int rebake_wrap(int i, int n, int mode) {
   if (mode == kRebakeWrapClampToEdge) return std::clamp(i, 0, n - 1);
   if (mode == kRebakeWrapMirroredRepeat) {
     int m = i % (2 * n);
@@ -25,8 +23,6 @@ int wrap(int i, int n, int mode) {
   int m = i % n;  // REPEAT (and anything unknown)
   return m < 0 ? m + n : m;
 }
-
-}  // namespace
 
 void check_rebake_texels(const RebakeTexelsDesc& d) {
   auto fail = [](const std::string& what) { throw EngineError("rebake_texels: " + what); };
@@ -88,82 +84,89 @@ double rebake_closest_point(const RebakeTriangle& t, double px, double py, doubl
   return best;
 }
 
-void rebake_texels_cpu(const RebakeTexelsDesc& d, float* texels, unsigned threads) {
-  check_rebake_texels(d);
-  const int W = int(d.width), H = int(d.height);
+void rebake_filter_box(const RebakeTexelsDesc& d, const RebakeTriangle& t, const uint32_t* first,
+                       const uint32_t* last, double bx, double by, double* out) {
   const int SW = int(d.source_width), SH = int(d.source_height);
   const int C = int(d.channels);
   const int alpha = C - 1;
   const int colour_channels = d.premultiplied ? C - 1 : C;
   const float* src = d.source;
-  const RebakeTriangle* tris = d.triangles;
+  double acc[4], straight[4];
+  // straight: colour un-premultiplied per texel (for footprints that are fully
+  // transparent, whose premultiplied colour is 0/0).
+  auto accumulate = [&](double* sum, bool straight_pass) {
+    std::fill(sum, sum + 4, 0.0);
+    for (int j = 0; j < t.ns[1]; ++j)
+      for (int i = 0; i < t.ns[0]; ++i) {
+        const double px = bx + (i + 0.5) / t.ns[0], py = by + (j + 0.5) / t.ns[1];
+        // The sample's own triangle: the owner, else the first candidate that
+        // contains it (a neighbour across an inner edge), else the owner's closest
+        // point (outside every chart: never read beyond the source chart).
+        const RebakeTriangle* st = &t;
+        double qx, qy;
+        if (rebake_closest_point(t, px, py, qx, qy) > 0) {
+          for (const uint32_t* it = first; it != last; ++it) {
+            const RebakeTriangle& u = d.triangles[*it];
+            if (&u == &t || px < u.lo[0] || px > u.hi[0] || py < u.lo[1] || py > u.hi[1]) continue;
+            double rx, ry;
+            if (rebake_closest_point(u, px, py, rx, ry) == 0) {
+              st = &u, qx = px, qy = py;
+              break;
+            }
+          }
+        }
+        const double dx = qx - st->n[0][0], dy = qy - st->n[0][1];
+        const double ox = st->o0[0] + st->J[0][0] * dx + st->J[0][1] * dy - 0.5;
+        const double oy = st->o0[1] + st->J[1][0] * dx + st->J[1][1] * dy - 0.5;
+        const double fx = std::floor(ox), fy = std::floor(oy);
+        const double wx = ox - fx, wy = oy - fy;
+        const int x0 = rebake_wrap(int(fx), SW, d.wrap_s), x1 = rebake_wrap(int(fx) + 1, SW, d.wrap_s);
+        const int y0 = rebake_wrap(int(fy), SH, d.wrap_t), y1 = rebake_wrap(int(fy) + 1, SH, d.wrap_t);
+        const float* p[4] = {src + (size_t(y0) * SW + x0) * C, src + (size_t(y0) * SW + x1) * C,
+                             src + (size_t(y1) * SW + x0) * C, src + (size_t(y1) * SW + x1) * C};
+        const double w[4] = {(1 - wx) * (1 - wy), wx * (1 - wy), (1 - wx) * wy, wx * wy};
+        for (int k = 0; k < 4; ++k) {
+          if (straight_pass) {
+            const double a = p[k][alpha];
+            for (int c = 0; c < colour_channels; ++c) sum[c] += w[k] * (a > 0 ? p[k][c] / a : 0.0);
+          } else {
+            for (int c = 0; c < C; ++c) sum[c] += w[k] * p[k][c];
+          }
+        }
+      }
+  };
+  const double inv = 1.0 / (t.ns[0] * t.ns[1]);
+  accumulate(acc, false);
+  if (d.premultiplied) {
+    const double a = acc[alpha] * inv;
+    if (!(a > 1e-7)) accumulate(straight, true);
+    for (int c = 0; c < colour_channels; ++c) out[c] = a > 1e-7 ? acc[c] * inv / a : straight[c] * inv;
+    out[alpha] = a;
+  } else {
+    for (int c = 0; c < C; ++c) out[c] = acc[c] * inv;
+  }
+}
+
+void rebake_texels_cpu(const RebakeTexelsDesc& d, float* texels, unsigned threads) {
+  check_rebake_texels(d);
+  const int W = int(d.width), H = int(d.height);
+  const int C = int(d.channels);
   const int T = int(kRebakeTile);
   const int tx = (W + T - 1) / T, ty = (H + T - 1) / T;
 
-  auto run_tile = [&](int tile, std::vector<double>& acc, std::vector<double>& straight) {
+  auto run_tile = [&](int tile) {
     const int bx = (tile % tx) * T, by = (tile / tx) * T;
     const uint32_t* first = d.tile_list + d.tile_start[tile];
     const uint32_t* last = d.tile_list + d.tile_start[tile + 1];
     if (first == last) return;
+    double f[4];
     for (int y = by; y < std::min(H, by + T); ++y)
       for (int x = bx; x < std::min(W, bx + T); ++x) {
         const uint32_t own = d.owner[size_t(y) * W + x];
         if (own == kRebakeNoOwner) continue;
-        const RebakeTriangle& t = tris[d.tile_list[own]];
-        // straight: colour un-premultiplied per texel (for footprints that are fully
-        // transparent, whose premultiplied colour is 0/0).
-        auto accumulate = [&](std::vector<double>& sum, bool straight_pass) {
-          std::fill(sum.begin(), sum.end(), 0.0);
-          for (int j = 0; j < t.ns[1]; ++j)
-            for (int i = 0; i < t.ns[0]; ++i) {
-              const double px = x + (i + 0.5) / t.ns[0], py = y + (j + 0.5) / t.ns[1];
-              // The sample's own triangle: the owner, else the first candidate that
-              // contains it (a neighbour across an inner edge), else the owner's closest
-              // point (outside every chart: never read beyond the source chart).
-              const RebakeTriangle* st = &t;
-              double qx, qy;
-              if (rebake_closest_point(t, px, py, qx, qy) > 0) {
-                for (const uint32_t* it = first; it != last; ++it) {
-                  const RebakeTriangle& u = tris[*it];
-                  if (&u == &t || px < u.lo[0] || px > u.hi[0] || py < u.lo[1] || py > u.hi[1]) continue;
-                  double rx, ry;
-                  if (rebake_closest_point(u, px, py, rx, ry) == 0) {
-                    st = &u, qx = px, qy = py;
-                    break;
-                  }
-                }
-              }
-              const double dx = qx - st->n[0][0], dy = qy - st->n[0][1];
-              const double ox = st->o0[0] + st->J[0][0] * dx + st->J[0][1] * dy - 0.5;
-              const double oy = st->o0[1] + st->J[1][0] * dx + st->J[1][1] * dy - 0.5;
-              const double fx = std::floor(ox), fy = std::floor(oy);
-              const double wx = ox - fx, wy = oy - fy;
-              const int x0 = wrap(int(fx), SW, d.wrap_s), x1 = wrap(int(fx) + 1, SW, d.wrap_s);
-              const int y0 = wrap(int(fy), SH, d.wrap_t), y1 = wrap(int(fy) + 1, SH, d.wrap_t);
-              const float* p[4] = {src + (size_t(y0) * SW + x0) * C, src + (size_t(y0) * SW + x1) * C,
-                                   src + (size_t(y1) * SW + x0) * C, src + (size_t(y1) * SW + x1) * C};
-              const double w[4] = {(1 - wx) * (1 - wy), wx * (1 - wy), (1 - wx) * wy, wx * wy};
-              for (int k = 0; k < 4; ++k) {
-                if (straight_pass) {
-                  const double a = p[k][alpha];
-                  for (int c = 0; c < colour_channels; ++c) sum[c] += w[k] * (a > 0 ? p[k][c] / a : 0.0);
-                } else {
-                  for (int c = 0; c < C; ++c) sum[c] += w[k] * p[k][c];
-                }
-              }
-            }
-        };
-        const double inv = 1.0 / (t.ns[0] * t.ns[1]);
-        accumulate(acc, false);
+        rebake_filter_box(d, d.triangles[d.tile_list[own]], first, last, x, y, f);
         float* o = texels + (size_t(y) * W + x) * C;
-        if (d.premultiplied) {
-          const double a = acc[alpha] * inv;
-          if (!(a > 1e-7)) accumulate(straight, true);
-          for (int c = 0; c < colour_channels; ++c) o[c] = float(a > 1e-7 ? acc[c] * inv / a : straight[c] * inv);
-          o[alpha] = float(a);
-        } else {
-          for (int c = 0; c < C; ++c) o[c] = float(acc[c] * inv);
-        }
+        for (int c = 0; c < C; ++c) o[c] = float(f[c]);
       }
   };
 
@@ -172,8 +175,7 @@ void rebake_texels_cpu(const RebakeTexelsDesc& d, float* texels, unsigned thread
   n = std::max(1u, std::min<unsigned>(n, unsigned(tiles)));
   std::atomic<int> next{0};
   auto work = [&] {
-    std::vector<double> acc(C), straight(C);
-    for (int tile; (tile = next.fetch_add(1)) < tiles;) run_tile(tile, acc, straight);
+    for (int tile; (tile = next.fetch_add(1)) < tiles;) run_tile(tile);
   };
   std::vector<std::thread> pool;
   for (unsigned k = 1; k < n; ++k) pool.emplace_back(work);

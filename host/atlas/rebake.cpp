@@ -47,14 +47,13 @@ const std::vector<float>& encode_table() {
   return table;
 }
 
-inline float encode_fast(const float* table, float v) {
+inline float encode_with(const float* table, float v) {
   v = std::clamp(v, 0.0f, 1.0f) * kEncodeSteps;
   const int i = int(v);
   const float f = v - float(i);
   return table[i] + f * (table[i + 1] - table[i]);
 }
 
-// A triangle as the engine samples it, plus what only the host needs.
 using Tri = engine::RebakeTriangle;
 
 // Orthogonal polar factor of a 2x2 matrix (rotation, or reflection when det < 0).
@@ -133,8 +132,24 @@ std::vector<int64_t> nearest_covered(const std::vector<uint8_t>& covered, int W,
 
 }  // namespace
 
-Image rebake(const Image& source, const std::vector<RebakeMesh>& meshes, const RebakeOptions& opt,
-             RebakeStats* stats, engine::Engine* engine) {
+void fill_gutter(Image& image, const std::vector<uint8_t>& covered) {
+  const int W = int(image.width), H = int(image.height), C = int(image.channels);
+  size_t count = 0;
+  for (uint8_t c : covered) count += c != 0;
+  if (count == 0 || count == covered.size()) return;
+  const std::vector<int64_t> nearest = nearest_covered(covered, W, H);
+#pragma omp parallel for schedule(static)
+  for (int64_t i = 0; i < int64_t(W) * H; ++i) {
+    if (covered[size_t(i)] || nearest[size_t(i)] < 0) continue;
+    std::copy_n(&image.pixels[size_t(nearest[size_t(i)]) * C], C, &image.pixels[size_t(i) * C]);
+  }
+}
+
+float srgb_decode_fast(float v) { return srgb_table()[size_t(std::clamp(v, 0.0f, 1.0f) * 65535.0f + 0.5f)]; }
+
+float srgb_encode_fast(float v) { return encode_with(encode_table().data(), v); }
+
+RebakePlan plan_rebake(const Image& source, const std::vector<RebakeMesh>& meshes, const RebakeOptions& opt) {
   if (source.width == 0 || source.height == 0 || source.channels == 0 ||
       source.pixels.size() != size_t(source.width) * source.height * source.channels)
     throw std::invalid_argument("rebake: empty or inconsistent source image");
@@ -142,17 +157,19 @@ Image rebake(const Image& source, const std::vector<RebakeMesh>& meshes, const R
   const int W = int(opt.width), H = int(opt.height);
   const int SW = int(source.width), SH = int(source.height);
   const int C = int(source.channels);
-  const bool has_alpha = C == 2 || C == 4;
+  RebakePlan plan;
+  plan.width = W, plan.height = H, plan.channels = C;
+  plan.has_alpha = C == 2 || C == 4;
+  const bool has_alpha = plan.has_alpha;
   const int alpha = has_alpha ? C - 1 : -1;
   const int colour_channels = has_alpha ? C - 1 : C;
   const bool colour = opt.role == RebakeRole::Color;
-  const bool linear = colour && opt.linear_light;
-  const bool premultiply = colour && has_alpha;
-  const bool normal = opt.role == RebakeRole::Normal && C >= 2;
+  const bool linear = plan.linear = colour && opt.linear_light;
+  const bool premultiply = plan.premultiplied = colour && has_alpha;
 
   // The working copy of the source: linear light and/or premultiplied for colour.
-  std::vector<float> work;
-  const float* src = source.pixels.data();
+  std::vector<float>& work = plan.work;
+  plan.source = &source;
   if (linear || premultiply) {
     work.resize(source.pixels.size());
     const auto& table = srgb_table();
@@ -164,17 +181,16 @@ Image rebake(const Image& source, const std::vector<RebakeMesh>& meshes, const R
       const float a = has_alpha ? p[alpha] : 1.0f;
       for (int c = 0; c < colour_channels; ++c) {
         float v = p[c];
-        if (linear) v = table[size_t(std::clamp(v, 0.0f, 1.0f) * 65535.0f + 0.5f)];
+        if (linear) v = table[size_t(std::clamp(v, 0.0f, 1.0f) * 65535.0f + 0.5f)];  // srgb_decode_fast
         q[c] = premultiply ? v * a : v;
       }
       if (has_alpha) q[alpha] = a;
     }
-    src = work.data();
   }
 
   // Triangles in texel units.
-  std::vector<Tri> tris;
-  std::vector<std::array<std::array<float, 2>, 2>> rotation;  // normal xy rotation old -> new, y-up
+  std::vector<Tri>& tris = plan.triangles;
+  auto& rotation = plan.rotation;  // normal xy rotation old -> new, y-up
   for (const RebakeMesh& m : meshes) {
     if (!m.indices || !m.old_uv || !m.new_uv) continue;
     for (size_t t = 0; t + 2 < m.index_count; t += 3) {
@@ -239,7 +255,8 @@ Image rebake(const Image& source, const std::vector<RebakeMesh>& meshes, const R
     y1 = std::min(ty - 1, int(std::min<double>(H - 1, std::ceil(t.hi[1]))) / T);
     return t.hi[0] > 0 && t.hi[1] > 0 && t.lo[0] < W && t.lo[1] < H;
   };
-  std::vector<uint32_t> start(size_t(tx) * ty + 1, 0);
+  std::vector<uint32_t>& start = plan.tile_start;
+  start.assign(size_t(tx) * ty + 1, 0);
   for (const Tri& t : tris) {
     int x0, x1, y0, y1;
     if (!tile_range(t, x0, x1, y0, y1)) continue;
@@ -247,7 +264,8 @@ Image rebake(const Image& source, const std::vector<RebakeMesh>& meshes, const R
       for (int x = x0; x <= x1; ++x) ++start[size_t(y) * tx + x + 1];
   }
   for (size_t i = 1; i < start.size(); ++i) start[i] += start[i - 1];
-  std::vector<uint32_t> list(start.back());
+  std::vector<uint32_t>& list = plan.tile_list;
+  list.assign(start.back(), 0);
   {
     std::vector<uint32_t> fill(start.begin(), start.end() - 1);
     for (uint32_t i = 0; i < tris.size(); ++i) {
@@ -263,7 +281,8 @@ Image rebake(const Image& source, const std::vector<RebakeMesh>& meshes, const R
   const double eps = 4.0 * std::numeric_limits<float>::epsilon() * std::max(W, H);
 
   // Owners: per texel, the candidate nearest to its centre among those overlapping it.
-  std::vector<uint32_t> owner(size_t(W) * H, engine::kRebakeNoOwner);
+  std::vector<uint32_t>& owner = plan.owner;
+  owner.assign(size_t(W) * H, engine::kRebakeNoOwner);
 #pragma omp parallel for schedule(static)
   for (int tile = 0; tile < tx * ty; ++tile) {
     const int bx = (tile % tx) * T, by = (tile / tx) * T;
@@ -289,16 +308,38 @@ Image rebake(const Image& source, const std::vector<RebakeMesh>& meshes, const R
         if (own) owner[size_t(y) * W + x] = uint32_t(own - list.data());
       }
   }
+  return plan;
+}
+
+engine::RebakeTexelsDesc RebakePlan::desc(const RebakeOptions& opt) const {
+  engine::RebakeTexelsDesc d;
+  d.width = uint32_t(width), d.height = uint32_t(height);
+  d.source = work.empty() ? source->pixels.data() : work.data();
+  d.source_width = source->width, d.source_height = source->height, d.channels = source->channels;
+  d.wrap_s = opt.wrap_s, d.wrap_t = opt.wrap_t;
+  d.premultiplied = premultiplied;
+  d.triangles = triangles.data(), d.triangle_count = triangles.size();
+  d.tile_start = tile_start.data(), d.tile_list = tile_list.data();
+  d.owner = owner.data();
+  return d;
+}
+
+Image rebake(const Image& source, const std::vector<RebakeMesh>& meshes, const RebakeOptions& opt,
+             RebakeStats* stats, engine::Engine* engine) {
+  const RebakePlan plan = plan_rebake(source, meshes, opt);
+  const int W = plan.width, H = plan.height, C = plan.channels;
+  const bool has_alpha = plan.has_alpha;
+  const int alpha = has_alpha ? C - 1 : -1;
+  const int colour_channels = has_alpha ? C - 1 : C;
+  const bool linear = plan.linear;
+  const bool normal = opt.role == RebakeRole::Normal && C >= 2;
+  const auto& tris = plan.triangles;
+  const auto& rotation = plan.rotation;
+  const auto& list = plan.tile_list;
+  const auto& owner = plan.owner;
 
   // The footprints, filtered on the engine (or the CPU kernel): straight colour, linear.
-  engine::RebakeTexelsDesc desc;
-  desc.width = opt.width, desc.height = opt.height;
-  desc.source = src, desc.source_width = source.width, desc.source_height = source.height, desc.channels = source.channels;
-  desc.wrap_s = opt.wrap_s, desc.wrap_t = opt.wrap_t;
-  desc.premultiplied = premultiply;
-  desc.triangles = tris.data(), desc.triangle_count = tris.size();
-  desc.tile_start = start.data(), desc.tile_list = list.data();
-  desc.owner = owner.data();
+  const engine::RebakeTexelsDesc desc = plan.desc(opt);
   std::vector<float> filtered(size_t(W) * H * C, 0.0f);
   const auto t_sample = std::chrono::steady_clock::now();
   if (engine) {
@@ -312,7 +353,6 @@ Image rebake(const Image& source, const std::vector<RebakeMesh>& meshes, const R
   out.width = opt.width, out.height = opt.height, out.channels = source.channels, out.bits = source.bits;
   out.pixels.assign(size_t(W) * H * C, 0.0f);
   std::vector<uint8_t> covered(size_t(W) * H, 0);
-  const std::vector<float>& encode = encode_table();
 #pragma omp parallel for schedule(static)
   for (int64_t i = 0; i < int64_t(W) * H; ++i) {
     if (owner[size_t(i)] == engine::kRebakeNoOwner) continue;
@@ -337,7 +377,7 @@ Image rebake(const Image& source, const std::vector<RebakeMesh>& meshes, const R
     } else {
       for (int c = 0; c < colour_channels; ++c) {
         float v = std::clamp(f[c], 0.0f, 1.0f);
-        if (linear) v = encode_fast(encode.data(), v);
+        if (linear) v = srgb_encode_fast(v);
         o[c] = v;
       }
       if (has_alpha) o[alpha] = std::clamp(f[alpha], 0.0f, 1.0f);
@@ -347,14 +387,7 @@ Image rebake(const Image& source, const std::vector<RebakeMesh>& meshes, const R
 
   size_t count = 0;
   for (uint8_t c : covered) count += c;
-  if (opt.fill_gutter && count > 0 && count < covered.size()) {
-    const std::vector<int64_t> nearest = nearest_covered(covered, W, H);
-#pragma omp parallel for schedule(static)
-    for (int64_t i = 0; i < int64_t(W) * H; ++i) {
-      if (covered[i] || nearest[i] < 0) continue;
-      std::copy_n(&out.pixels[size_t(nearest[i]) * C], C, &out.pixels[size_t(i) * C]);
-    }
-  }
+  if (opt.fill_gutter) fill_gutter(out, covered);
   if (stats) {
     stats->covered = count;
     stats->triangles = tris.size();

@@ -39,6 +39,7 @@
 #include "core/image.h"
 #include "engine.h"
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <vector>
@@ -95,5 +96,38 @@ Image rebake(const Image& source, const std::vector<RebakeMesh>& meshes, const R
 // sRGB transfer functions (IEC 61966-2-1), exposed for tests and callers.
 float srgb_to_linear(float v);
 float linear_to_srgb(float v);
+
+// The fast forms rebake uses: decode through the exact 16-bit table (exact for 8- and
+// 16-bit values), encode by interpolation in a 16K table (error < 2e-6). Shared with
+// rebake_lsq.cpp so both bakes convert identically.
+float srgb_decode_fast(float v);
+float srgb_encode_fast(float v);
+
+// ---- The set-up of a re-bake, shared with rebake_lsq.cpp (one copy of each idea) ----
+//
+// Everything rebake() prepares before sampling: the working source (linear light and/or
+// premultiplied for colour; empty when the stored values are used as they are), the
+// triangles in texel units with their normal rotations, the tile bins (CSR, triangle
+// order kept) and the owner of every texel (position in tile_list, kRebakeNoOwner where
+// uncovered). `source` must outlive the plan.
+struct RebakePlan {
+  int width = 0, height = 0, channels = 0;
+  bool has_alpha = false, linear = false, premultiplied = false;
+  const Image* source = nullptr;
+  std::vector<float> work;
+  std::vector<engine::RebakeTriangle> triangles;
+  std::vector<std::array<std::array<float, 2>, 2>> rotation;  // normal xy rotation old -> new, y-up
+  std::vector<uint32_t> tile_start, tile_list, owner;
+  // The engine's view of the plan (pointers into it and into *source).
+  engine::RebakeTexelsDesc desc(const RebakeOptions& options) const;
+};
+
+// The gutter fill rebake() ends with: every texel with covered == 0 (width * height bytes)
+// takes the value of the nearest texel with covered != 0 (exact Euclidean distance, ties to
+// the first in scan order). Nothing happens when none or all are covered.
+void fill_gutter(Image& image, const std::vector<uint8_t>& covered);
+
+// Throws like rebake() for an empty source or zero size.
+RebakePlan plan_rebake(const Image& source, const std::vector<RebakeMesh>& meshes, const RebakeOptions& options);
 
 }  // namespace uvpress::atlas

@@ -35,6 +35,7 @@ void add_bench(CLI::App& app, Globals& g) {
   add_bench_eval(*bench, g);
   add_bench_rebake(*bench, g);
   add_bench_quality(*bench, g);
+  add_bench_rebake_lsq(*bench, g);
 }
 
 }  // namespace uvpress::cli
