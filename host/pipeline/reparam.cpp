@@ -627,20 +627,30 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
   eval::EvalOptions score_options;
   score_options.artifacts = false;
   std::vector<Realized> built;
+  std::string score_failure;
   std::vector<io::GltfFile> files;
   double t_score = 0;
   for (const Candidate& c : plans) {
     files.push_back(original);
     built.push_back(realize(asset, layouts, prepared, layout_base, files.back(), engine, o, c, progress, warnings));
-    if (plans.size() > 1 || (o.guard && o.max_gmsd <= 0 && !prepared.empty())) {
+    if (score_failure.empty() && (plans.size() > 1 || (o.guard && o.max_gmsd <= 0 && !prepared.empty()))) {
       auto t0 = Clock::now();
-      built.back().q = eval::score_as_written(original, files.back(), engine, score_options).q;
+      try {
+        built.back().q = eval::score_as_written(original, files.back(), engine, score_options).q;
+      } catch (const InputError& e) {
+        // eval cannot score this asset (e.g. no UV area to frame): keep the paper's layout,
+        // skip the guard, and say so.
+        score_failure = e.what();
+        warnings.push_back("candidates and the resize guard skipped: eval cannot score this asset (" + score_failure + ")");
+      }
       t_score += seconds_since(t0);
     }
   }
+  if (!score_failure.empty())
+    for (Realized& r : built) r.q = -1;
   size_t best = 0;
   for (size_t k = 1; k < built.size(); ++k)
-    if (built[k].q < built[best].q) best = k;
+    if (built[k].q >= 0 && built[k].q < built[best].q) best = k;
   json candidates = json::array();
   for (const Realized& r : built)
     candidates.push_back({{"name", r.name},
@@ -655,7 +665,8 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
   // tools do). Whichever looks better on screen is written; --force-reparam skips this.
   json guard = nullptr;
   std::string chosen_by = prepared.empty() ? "untouched" : "reparam";
-  if (o.guard && o.max_gmsd <= 0 && !prepared.empty()) {
+  if (!score_failure.empty()) guard = {{"skipped", score_failure}};
+  if (o.guard && o.max_gmsd <= 0 && !prepared.empty() && score_failure.empty()) {
     auto t0 = Clock::now();
     std::vector<std::pair<int, std::array<uint32_t, 2>>> sizes;
     for (const auto& t : chosen.textures) sizes.push_back({t["image"].get<int>(), {t["new_size"][0].get<uint32_t>(), t["new_size"][1].get<uint32_t>()}});

@@ -76,8 +76,9 @@ void add_bench_quality(CLI::App& bench, Globals& g) {
         line["layout"] = report["layout"];
         line["cost_ratio"] = report["cost_ratio"];
         const auto& guard = report["guard"];
-        line["q_reparam"] = guard.is_object() ? guard["q_reparam"] : nlohmann::ordered_json(nullptr);
-        line["q_resize"] = guard.is_object() ? guard["q_resize"] : nlohmann::ordered_json(nullptr);
+        const bool compared = guard.is_object() && guard.contains("q_resize");
+        line["q_reparam"] = compared ? guard["q_reparam"] : nlohmann::ordered_json(nullptr);
+        line["q_resize"] = compared ? guard["q_resize"] : nlohmann::ordered_json(nullptr);
         std::string why;
         if (report["chosen"] == "untouched") {
           line["ratio_vs_resize"] = nullptr, line["ratio_vs_isometric"] = nullptr;

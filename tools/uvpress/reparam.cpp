@@ -117,7 +117,9 @@ void add_reparam(CLI::App& app, Globals& g) {
       }
       // What was written, and how it compares on screen with the resize a user would do.
       std::string verdict;
-      if (report["guard"].is_object()) {
+      if (report["guard"].is_object() && report["guard"].contains("skipped")) {
+        verdict = "; not compared with a plain resize (eval cannot score this asset)";
+      } else if (report["guard"].is_object()) {
         const auto& gr = report["guard"];
         char text[200];
         if (report["chosen"] == "reparam")
