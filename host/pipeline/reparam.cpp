@@ -695,7 +695,9 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
     json ev = eval::evaluate(original, {{"reparam", &file}}, engine, eo, nullptr,
                              progress ? eval::Progress(progress) : eval::Progress());
     const json& layout = ev["layouts"][1];
-    const double full_w = layout["full_size"][0].get<double>();
+    // eval's sizes are image texels relative to the input's image: the point's width is the
+    // size to write, whatever the packing made of the written image.
+    const double full_w = layout["as_written"]["width"].get<double>();
     double ratio = 1, chosen_q = layout["curve"].back()["q"].get<double>(), chosen_c = 1;
     bool met = false;
     for (const auto& point : layout["curve"])
