@@ -198,14 +198,14 @@ void rebake_texels_cpu(const RebakeTexelsDesc& desc, float* texels, unsigned thr
 // Texel index i wrapped into [0, n) by a glTF wrap mode (anything unknown as REPEAT).
 int rebake_wrap(int i, int n, int mode);
 
-// The kernel's filter for one footprint: the unit square [bx, bx + 1] x [by, by + 1] of new
-// texel space, n_x by n_y samples (t.ns) mapped through t (the owner) or the first
+// The kernel's filter for one footprint: the square [bx, bx + size] x [by, by + size] of new
+// texel space (size 1: one texel), n_x by n_y samples (t.ns) mapped through t (the owner) or the first
 // triangle of [first, last) that contains them, as described above; writes desc.channels
 // doubles to out (straight colour when premultiplied). rebake_texels_cpu calls it with the
 // texel's corner; host/atlas/rebake_lsq.cpp with a square centred on any sample point (its
 // band-limited target), so both bakes see one filter.
 void rebake_filter_box(const RebakeTexelsDesc& desc, const RebakeTriangle& t, const uint32_t* first,
-                       const uint32_t* last, double bx, double by, double* out);
+                       const uint32_t* last, double bx, double by, double* out, double size = 1.0);
 
 class Engine {
  public:

@@ -85,7 +85,7 @@ double rebake_closest_point(const RebakeTriangle& t, double px, double py, doubl
 }
 
 void rebake_filter_box(const RebakeTexelsDesc& d, const RebakeTriangle& t, const uint32_t* first,
-                       const uint32_t* last, double bx, double by, double* out) {
+                       const uint32_t* last, double bx, double by, double* out, double size) {
   const int SW = int(d.source_width), SH = int(d.source_height);
   const int C = int(d.channels);
   const int alpha = C - 1;
@@ -98,7 +98,7 @@ void rebake_filter_box(const RebakeTexelsDesc& d, const RebakeTriangle& t, const
     std::fill(sum, sum + 4, 0.0);
     for (int j = 0; j < t.ns[1]; ++j)
       for (int i = 0; i < t.ns[0]; ++i) {
-        const double px = bx + (i + 0.5) / t.ns[0], py = by + (j + 0.5) / t.ns[1];
+        const double px = bx + size * (i + 0.5) / t.ns[0], py = by + size * (j + 0.5) / t.ns[1];
         // The sample's own triangle: the owner, else the first candidate that
         // contains it (a neighbour across an inner edge), else the owner's closest
         // point (outside every chart: never read beyond the source chart).

@@ -72,6 +72,7 @@ Footprint rasterize(const ChartShape& chart, double scale, uint32_t block) {
     f.count = 1;
     return f;
   }
+  if (chart.snap) mx = std::floor(mx), my = std::floor(my);
   f.min_x = mx, f.min_y = my;
   const double inv = 1.0 / block;
   f.w = std::max<uint32_t>(1, uint32_t(std::ceil((Mx - mx) * inv - 1e-9)));

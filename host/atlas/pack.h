@@ -33,6 +33,10 @@ namespace uvpress::atlas {
 struct ChartShape {
   std::vector<double> points;       // x y per vertex
   std::vector<uint32_t> triangles;  // 3 indices per triangle
+  // Place with a whole-texel translation: the footprint's origin is the scaled chart's
+  // minimum corner rounded down to a texel, so texel (i, j) of the scaled chart's own grid
+  // lands on a texel of the atlas (the chart's texels can then be copied, not resampled).
+  bool snap = false;
 };
 
 struct PackOptions {

@@ -62,6 +62,7 @@ Image rebake_least_squares(const Image& source, const std::vector<RebakeMesh>& m
   const int W = plan.width, H = plan.height, C = plan.channels;
   const bool linear = plan.linear;
   const int k = std::max(2, int((std::max<uint32_t>(lsq.samples_per_axis, 2) + 1) / 2 * 2));
+  const double cell = lsq.target_cell > 0 ? lsq.target_cell : 1.0 / k;  // target footprint, new texels
   constexpr int T = int(engine::kRebakeTile);
   const int tx = (W + T - 1) / T;
   const auto& tris = plan.triangles;
@@ -158,8 +159,11 @@ Image rebake_least_squares(const Image& source, const std::vector<RebakeMesh>& m
           const uint32_t *first, *last;
           const Tri* t = locate(x, y, sx, sy, first, last);
           if (!t) continue;
-          // S(x): the area filter's footprint, a new texel wide, centred on the sample.
-          engine::rebake_filter_box(desc, *t, first, last, sx - 0.5, sy - 0.5, S);
+          // S(x): the area filter over the sample's own cell (target_cell new texels a side,
+          // centred on it): the source itself at the sample density, so the solve is the L2
+          // projection of the source onto bilinear texels (target_cell 1: the band-limited
+          // source a new texel wide, i.e. what the area bake approximates).
+          engine::rebake_filter_box(desc, *t, first, last, sx - 0.5 * cell, sy - 0.5 * cell, S, cell);
           for (int c = 0; c < C; ++c) ss += S[c] * S[c];
           const double fx = std::floor(sx - 0.5), fy = std::floor(sy - 0.5);
           const double ax = sx - 0.5 - fx, ay = sy - 0.5 - fy;

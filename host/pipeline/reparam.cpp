@@ -2,7 +2,9 @@
 
 #include "atlas/charts.h"
 #include "atlas/pack.h"
+#include "atlas/place_texels.h"
 #include "atlas/rebake.h"
+#include "atlas/rebake_lsq.h"
 #include "core/disjoint_sets.h"
 #include "core/error.h"
 #include "core/quantile.h"
@@ -221,6 +223,7 @@ struct Candidate {
   std::string name;
   bool reshape = true;
   double floor = 0;
+  bool least_squares = false;  // re-bake by least squares (atlas/rebake_lsq.h) instead of the area filter
 };
 
 // What one candidate came to, in the output file it was written into.
@@ -242,18 +245,18 @@ perceptual::TriangleTarget target_of(const perceptual::TriangleResult& r, double
   return {r.rotation, S, r.weight_rotation, r.weight_stretch};
 }
 
-// The largest singular value of the map old -> new of one triangle (both in texels).
-double largest_stretch(const double* a, const double* b, const double* c, const double* A, const double* B,
+// The smallest singular value of the map old -> new of one triangle (both in texels).
+double smallest_stretch(const double* a, const double* b, const double* c, const double* A, const double* B,
                        const double* C) {
   const double e[4] = {b[0] - a[0], c[0] - a[0], b[1] - a[1], c[1] - a[1]};  // old edges as columns
   const double f[4] = {B[0] - A[0], C[0] - A[0], B[1] - A[1], C[1] - A[1]};  // new edges
   const double det = e[0] * e[3] - e[1] * e[2];
   if (!(std::abs(det) > 1e-12)) return 0;
-  // M = F E^-1; sigma_max^2 = (|M|_F^2 + sqrt(|M|_F^4 - 4 det(M)^2)) / 2.
+  // M = F E^-1; sigma_min^2 = (|M|_F^2 - sqrt(|M|_F^4 - 4 det(M)^2)) / 2.
   const double m[4] = {(f[0] * e[3] - f[1] * e[2]) / det, (-f[0] * e[1] + f[1] * e[0]) / det,
                        (f[2] * e[3] - f[3] * e[2]) / det, (-f[2] * e[1] + f[3] * e[0]) / det};
   const double fro = m[0] * m[0] + m[1] * m[1] + m[2] * m[2] + m[3] * m[3], dm = m[0] * m[3] - m[1] * m[2];
-  return std::sqrt(0.5 * (fro + std::sqrt(std::max(0.0, fro * fro - 4 * dm * dm))));
+  return std::sqrt(std::max(0.0, 0.5 * (fro - std::sqrt(std::max(0.0, fro * fro - 4 * dm * dm)))));
 }
 
 // Builds one candidate into `file` (a copy of the input): mesh stage per chart, packing
@@ -319,20 +322,21 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
     }
     out.t_mesh += seconds_since(t0);
 
-    // The packing scale may grow until the layout fills the budget, but no part of the
-    // surface should get more texels than the source has: the cap is the scale at which the
-    // densest triangles (area-weighted 98th percentile of the largest singular value of
-    // old -> new) reach the source density. A few outliers above it are only magnified.
+    // The packing scale may grow until the layout fills the budget, but not past the point
+    // where the densest triangles (area-weighted 98th percentile) get more texels than the
+    // source has in every direction (their smallest singular value of old -> new reaches
+    // 1): beyond that, texels would only magnify. An anisotropic target (one stretch near 1,
+    // the other small) may thus be magnified along its long axis while its short axis gains.
     double s_max = 1;
     {
-      std::vector<std::pair<double, double>> sigma;  // (largest singular value, old area)
+      std::vector<std::pair<double, double>> sigma;  // (smallest singular value, old area)
       double total = 0;
       for (size_t c = 0; c < charts.size(); ++c)
         for (size_t t = 0; t < charts[c].triangles.size(); ++t) {
           const uint32_t* l = &charts[c].local[3 * t];
           const auto& u = charts[c].uv;
           const auto& v = new_uv_of[c];
-          const double sm = largest_stretch(&u[2 * l[0]], &u[2 * l[1]], &u[2 * l[2]], &v[2 * l[0]], &v[2 * l[1]], &v[2 * l[2]]);
+          const double sm = smallest_stretch(&u[2 * l[0]], &u[2 * l[1]], &u[2 * l[2]], &v[2 * l[0]], &v[2 * l[1]], &v[2 * l[2]]);
           const double area = std::abs(signed_area(&u[2 * l[0]], &u[2 * l[1]], &u[2 * l[2]]));
           if (sm > 0) sigma.push_back({sm, area}), total += area;
         }
@@ -363,16 +367,54 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
     budget.s_max = s_max;
     budget.measure = atlas::CostMeasure::ImageTexels;  // --cost is about texture memory
     budget.pack.gutter = o.gutter, budget.pack.block = o.block;
+    std::vector<char> unit_exact(P.units.size(), 0);
+    if (o.exact_texels)
+      for (size_t u = 0; u < P.units.size(); ++u) {
+        unit_exact[u] = 1;
+        for (uint32_t c : P.units[u]) unit_exact[u] &= char(new_uv_of[c] == charts[c].uv);
+        shapes[u].snap = unit_exact[u] != 0;  // so that the atlas chosen has room for whole-texel origins
+      }
     atlas::AtlasChoice choice = atlas::choose_atlas(shapes, P.driver.width, P.driver.height, P.old_used, budget);
     if (!choice.packing.ok)
       throw InputError(file.path, "the charts of layout " + std::to_string(li) + " do not fit any atlas within the budget");
+    // Units whose charts keep their shape keep their texels (atlas/place_texels.h): the
+    // source resized once to Rw x Rh at the packing scale (floored to whole texels, so the
+    // scale per axis is Rw / W, Rh / H), the units' points scaled to that grid and packed
+    // with whole-texel translations into the same atlas; a little smaller when snapping
+    // does not fit.
+    std::vector<std::array<double, 2>> unit_factor(P.units.size(), {1.0, 1.0});
+    uint32_t Rw = 0, Rh = 0;
+    if (std::find(unit_exact.begin(), unit_exact.end(), 1) != unit_exact.end()) {
+      bool placed = false;
+      for (int attempt = 0; attempt < 12 && !placed; ++attempt) {
+        const double s = choice.packing.scale * std::pow(0.99, attempt);
+        Rw = std::max(1u, uint32_t(std::floor(W * s + 1e-9))), Rh = std::max(1u, uint32_t(std::floor(H * s + 1e-9)));
+        std::vector<atlas::ChartShape> snapped = shapes;
+        for (size_t u = 0; u < P.units.size(); ++u) {
+          if (!unit_exact[u]) continue;
+          unit_factor[u] = {Rw / W / s, Rh / H / s};
+          for (size_t k = 0; k < snapped[u].points.size(); k += 2)
+            snapped[u].points[k] *= unit_factor[u][0], snapped[u].points[k + 1] *= unit_factor[u][1];
+          snapped[u].snap = true;
+        }
+        atlas::Packing q = atlas::pack_charts(snapped, choice.packing.width, choice.packing.height, s, budget.pack);
+        if (q.ok) choice.packing = std::move(q), shapes = std::move(snapped), placed = true;
+      }
+      if (!placed) {  // keep the packing found (snapped origins, resampled texels)
+        std::fill(unit_exact.begin(), unit_exact.end(), 0);
+        Rw = Rh = 0;
+        std::fill(unit_factor.begin(), unit_factor.end(), std::array<double, 2>{1.0, 1.0});
+        warnings.push_back(cand.name + ": layout " + std::to_string(li) + ": unreshaped charts could not be snapped to whole texels; resampled");
+      }
+    }
     const auto& packing = choice.packing;
     // New UVs per primitive vertex (vertices no triangle uses keep theirs).
     std::vector<std::vector<float>> new_uv(L.uv_sets.size()), welded_new(L.uv_sets.size());
     for (size_t si = 0; si < L.uv_sets.size(); ++si) welded_new[si].assign(2 * P.welded_count[si], 0.0f);
     for (size_t c = 0; c < charts.size(); ++c)
       for (size_t v = 0; v < charts[c].vertices.size(); ++v) {
-        auto uv = packing.map_uv(P.unit_of_chart[c], new_uv_of[c][2 * v], new_uv_of[c][2 * v + 1]);
+        const auto& f = unit_factor[P.unit_of_chart[c]];
+        auto uv = packing.map_uv(P.unit_of_chart[c], f[0] * new_uv_of[c][2 * v], f[1] * new_uv_of[c][2 * v + 1]);
         welded_new[charts[c].uv_set][2 * charts[c].vertices[v]] = float(uv[0]);
         welded_new[charts[c].uv_set][2 * charts[c].vertices[v] + 1] = float(uv[1]);
       }
@@ -395,7 +437,7 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
       meshes.push_back({prim.indices.data(), prim.indices.size(), prim.uv_sets[size_t(L.uv_sets[si].tex_coord)].uv.data(),
                         new_uv[si].data(), prim.vertex_count()});
     }
-    size_t baked_count = 0;
+    size_t baked_count = 0, exact_texels = 0;
     for (int i : L.images) {
       const io::AssetImage& img = asset.images[size_t(i)];
       const std::string name = file.path + ": image " + std::to_string(i);
@@ -416,6 +458,23 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
         ro.wrap_s = use.wrap_s, ro.wrap_t = use.wrap_t;
       }
       Image baked = atlas::rebake(source, meshes, ro, nullptr, &engine);
+      if (cand.least_squares && ro.role != atlas::RebakeRole::Normal) {
+        atlas::LsqBakeStats lsq;
+        baked = atlas::rebake_least_squares(source, meshes, ro, baked, &lsq);
+        if (!lsq.solved) warnings.push_back(cand.name + ": image " + std::to_string(i) + ": the least-squares bake did not converge");
+      }
+      // Unreshaped units: their texels copied from the source resized like a user would
+      // (Lanczos-3 in stored values), on the same grid. Only for images at the driver's
+      // size (others are not on that grid) and not for normal maps (a quarter turn must
+      // rotate their vectors: the re-bake does that).
+      size_t copied = 0;
+      if (Rw > 0 && source.width == P.driver.width && source.height == P.driver.height && ro.role != atlas::RebakeRole::Normal) {
+        const Image resized = Rw == source.width && Rh == source.height ? source : eval::resize_lanczos3(source, Rw, Rh, false);
+        const uint32_t dilation = std::min(1u, o.gutter / 2);
+        for (size_t u = 0; u < P.units.size(); ++u)
+          if (unit_exact[u]) copied += atlas::copy_chart_texels(resized, shapes[u], packing, u, dilation, baked);
+      }
+      exact_texels += copied;
       const std::vector<uint8_t> old_bytes = file.image_bytes[size_t(i)];
       file.image_bytes[size_t(i)] = io::encode_image(baked, format_of(old_bytes));
       out.old_texels += double(source.width) * source.height;
@@ -444,6 +503,8 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
     jl["rigid_charts"] = P.rigid;
     jl["shared_texel_charts"] = P.shared_charts;  // packed with the charts they share texels with, unreshaped
     jl["packing_units"] = P.units.size();
+    jl["exact_units"] = size_t(std::count(unit_exact.begin(), unit_exact.end(), 1));  // texels copied, not resampled
+    jl["exact_texels"] = exact_texels;
     jl["atlas"] = {packing.width, packing.height};
     jl["scale"] = packing.scale;
     jl["scale_cap"] = s_max;  // the source density of the densest triangles
@@ -628,12 +689,13 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
   score_options.artifacts = false;
   std::vector<Realized> built;
   std::string score_failure;
+  const bool scoring = !prepared.empty() && (plans.size() > 1 || (o.max_gmsd <= 0 && (o.guard || o.least_squares_bake)));
   std::vector<io::GltfFile> files;
   double t_score = 0;
   for (const Candidate& c : plans) {
     files.push_back(original);
     built.push_back(realize(asset, layouts, prepared, layout_base, files.back(), engine, o, c, progress, warnings));
-    if (score_failure.empty() && (plans.size() > 1 || (o.guard && o.max_gmsd <= 0 && !prepared.empty()))) {
+    if (score_failure.empty() && scoring) {
       auto t0 = Clock::now();
       try {
         built.back().q = eval::score_as_written(original, files.back(), engine, score_options).q;
@@ -651,6 +713,19 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
   size_t best = 0;
   for (size_t k = 1; k < built.size(); ++k)
     if (built[k].q >= 0 && built[k].q < built[best].q) best = k;
+  // The kept layout once more with the least-squares re-bake (the texels whose bilinear
+  // reconstruction is closest to the source over the surface); kept only if it scores better.
+  if (score_failure.empty() && built[best].q >= 0 && o.least_squares_bake && o.max_gmsd <= 0) {
+    Candidate c = plans[best];
+    c.name += "+least-squares";
+    c.least_squares = true;
+    files.push_back(original);
+    built.push_back(realize(asset, layouts, prepared, layout_base, files.back(), engine, o, c, progress, warnings));
+    auto t0 = Clock::now();
+    built.back().q = eval::score_as_written(original, files.back(), engine, score_options).q;
+    t_score += seconds_since(t0);
+    if (built.back().q < built[best].q) best = built.size() - 1;
+  }
   json candidates = json::array();
   for (const Realized& r : built)
     candidates.push_back({{"name", r.name},

@@ -40,6 +40,11 @@ struct ReparamOptions {
   // Before writing, compare the result with the input resized (Lanczos-3) to the same
   // texels by the same 20-view score, and write the better (--force-reparam: false).
   bool guard = true;
+  // With candidates: also re-bake the kept layout by least squares and keep the better.
+  bool least_squares_bake = true;
+  // Charts that keep their shape keep their texels: copied from the source resized to the
+  // layout's scale (Lanczos-3), whole-texel placements (atlas/place_texels.h).
+  bool exact_texels = true;
   perceptual::TriangleStageOptions triangle;
 };
 

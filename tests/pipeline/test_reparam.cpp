@@ -3,7 +3,9 @@
 #include <catch2/catch.hpp>
 
 #include "engine.h"
+#include "eval/eval.h"
 #include "io/asset.h"
+#include "io/gltf_append.h"
 #include "io/gltf_io.h"
 #include "io/image_io.h"
 #include "pipeline/demo_asset.h"
@@ -155,4 +157,74 @@ TEST_CASE("reparam --max-gmsd: the cheapest size that meets the bound, tighter b
   const uint32_t loose = run(0.06), tight = run(0.02);
   CHECK(loose < tight);
   CHECK(loose < 256);
+}
+
+TEST_CASE("reparam's guard writes the plain resize when the layout loses, and reparam's layout with --force-reparam",
+          "[pipeline][reparam][shared]") {
+  if (!test::shared_dir()) UVPRESS_SKIP("../shared is absent");
+  auto engine = engine::make_cpu_engine({});
+  // Duck's charts only repacked at half the texels: its atlas is already tight, so the
+  // repack gets a smaller scale than a resize and is resampled twice: built to lose.
+  const auto path = *test::shared_dir() / "assets" / "Duck" / "glTF" / "Duck.gltf";
+  const io::GltfFile in = io::load_gltf(path.string());
+  io::GltfFile out = in, layout;
+  auto report = pipeline::reparam(out, *engine, keep_shapes(0.5), {}, &layout);
+  INFO(report.dump());
+  REQUIRE(report["guard"].is_object());
+  const double q_reparam = report["guard"]["q_reparam"].get<double>(), q_resize = report["guard"]["q_resize"].get<double>();
+  CHECK(q_resize < q_reparam);
+  CHECK(report["chosen"] == "resize");
+  // What was written is the resize: the input's UVs, and it scores (independently, as
+  // written) what the guard measured; reparam's layout scores its own q.
+  const io::Asset a = io::build_asset(in), b = io::build_asset(out);
+  REQUIRE(a.primitives.size() == b.primitives.size());
+  CHECK(a.primitives[0].uv_sets[0].uv == b.primitives[0].uv_sets[0].uv);
+  eval::EvalOptions eo;
+  eo.artifacts = false;
+  auto written = eval::score_as_written(in, out, *engine, eo);
+  CHECK(written.q == Approx(q_resize).epsilon(1e-9));
+  CHECK(written.c_r == Approx(report["cost_ratio"].get<double>()).epsilon(1e-9));
+  CHECK(eval::score_as_written(in, layout, *engine, eo).q == Approx(q_reparam).epsilon(1e-9));
+  // --force-reparam: reparam's layout is written, with the score the guard reported.
+  pipeline::ReparamOptions forced = keep_shapes(0.5);
+  forced.guard = false;
+  io::GltfFile out2 = in;
+  auto report2 = pipeline::reparam(out2, *engine, forced);
+  CHECK(report2["chosen"] == "reparam");
+  CHECK(eval::score_as_written(in, out2, *engine, eo).q == Approx(q_reparam).epsilon(1e-9));
+}
+
+TEST_CASE("reparam --no-optimize at cost 1: charts that fit at scale 1 keep their texels exactly (lossless)",
+          "[pipeline][reparam]") {
+  auto engine = engine::make_cpu_engine({});
+  // The demo sheet with its chart shrunk into 60 % of the texture at a sub-texel offset:
+  // it fits at the source density, so a repack moves it by whole texels and copies them.
+  io::GltfFile in = pipeline::make_demo_asset({16, 256});
+  {
+    const io::Asset a = io::build_asset(in);
+    std::vector<float> uv = a.primitives[0].uv_sets[0].uv;
+    for (size_t k = 0; k < uv.size(); k += 2)
+      uv[k] = 0.1f + 0.6f * uv[k] + 0.37f / 256, uv[k + 1] = 0.2f + 0.6f * uv[k + 1] + 0.21f / 256;
+    auto& prim = in.model.meshes[size_t(a.primitives[0].mesh)].primitives[size_t(a.primitives[0].primitive)];
+    prim.attributes["TEXCOORD_0"] = io::append_float_accessor(in.model, uv, TINYGLTF_TYPE_VEC2);
+  }
+  eval::EvalOptions eo;
+  eo.artifacts = false;
+  pipeline::ReparamOptions o = keep_shapes(1.0);
+  o.guard = false;  // at cost 1 the "resize" is the input itself: a tie the guard would give to it
+  io::GltfFile out = in;
+  auto report = pipeline::reparam(out, *engine, o);
+  INFO(report.dump());
+  const auto& layout = report["layouts"][0];
+  CHECK(layout["scale"].get<double>() == Approx(1.0).margin(1e-12));
+  CHECK(layout["exact_units"] == 1);
+  const io::Asset a = io::build_asset(in), b = io::build_asset(out);
+  CHECK(a.primitives[0].uv_sets[0].uv != b.primitives[0].uv_sets[0].uv);  // moved
+  const double q = eval::score_as_written(in, out, *engine, eo).q;
+  CHECK(q < 1e-6);
+  // The same repack resampled (texels not copied) is measurably lossy: what the copy saves.
+  o.exact_texels = false;
+  io::GltfFile resampled = in;
+  pipeline::reparam(resampled, *engine, o);
+  CHECK(eval::score_as_written(in, resampled, *engine, eo).q > 1e-4);
 }
