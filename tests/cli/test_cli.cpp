@@ -136,9 +136,9 @@ TEST_CASE("CLI: bench luminance prints one JSON line per backend, validation cle
 TEST_CASE("CLI: reparam's summary line says when the density cap kept it under --cost, and counts the triangle stage", "[cli][reparam]") {
   test::Scratch dir("cli-reparam-summary");
   io::save_gltf(pipeline::make_demo_asset({12, 128}), (dir / "demo.glb").string());
-  // --cost 1: the paper's layout shrinks its flat triangles, so at the source density it
-  // cannot fill the whole budget; the candidates with floored stretches or the repack may.
-  // The summary line names the cap exactly when the layout kept was held under --cost by it.
+  // --cost 1: a layout may reach the source density of its densest triangles before it
+  // fills the budget. The summary line names the cap exactly when the layout kept was held
+  // under --cost by it.
   auto r = run_uvpress("reparam " + quoted(dir / "demo.glb") + " -o " + quoted(dir / "out.glb") +
                        " --cost 1 --evaluations 12 --view-size 16 --force-reparam --report " + quoted(dir / "r.json"));
   INFO(r.out << r.err);
@@ -147,7 +147,7 @@ TEST_CASE("CLI: reparam's summary line says when the density cap kept it under -
   auto report = nlohmann::json::parse(in);
   REQUIRE(report["candidates"].size() >= 2);
   CHECK(report["candidates"][0]["name"] == "optimized");
-  CHECK(report["candidates"][0]["cost_ratio"].get<double>() < 0.98);
+  for (const auto& c : report["candidates"]) CHECK(c["cost_ratio"].get<double>() <= 1.0 + 1e-9);
   CHECK(report["chosen"] == "reparam");  // --force-reparam: never the resize
   const bool capped = report["layouts"][0]["capped_at_source_density"].get<bool>() && report["cost_ratio"].get<double>() < 0.98;
   CHECK((r.out.find("capped at the source texel density") != std::string::npos) == capped);
