@@ -319,7 +319,8 @@ nlohmann::ordered_json evaluate(const io::GltfFile& reference, const std::vector
   struct Entry {
     LayoutMesh mesh;
     double aspect = 1;
-    bool users_resize = false;  // the input: resized as users' tools do, not area-filtered
+    bool users_resize = false;  // the input: resized as users' tools do (the variant that scores better)
+    bool paper_filter = false;  // input-rebaked: area-filtered to each c_r as in the paper's protocol
     bool scored_as_written = false;
     Scored as_written;
     uint32_t written_size[2] = {0, 0};
@@ -345,6 +346,7 @@ nlohmann::ordered_json evaluate(const io::GltfFile& reference, const std::vector
     // other layout, so its losses are the ones the others pay too.
     Entry e;
     e.mesh = ref, e.mesh.name = "input-rebaked", e.aspect = double(ref.full.width) / ref.full.height;
+    e.paper_filter = true;
     rebake_into(e);
     layouts.push_back(std::move(e));
   }
@@ -415,6 +417,7 @@ nlohmann::ordered_json evaluate(const io::GltfFile& reference, const std::vector
   const Resize area = [](const Image& i, uint32_t w, uint32_t h) { return resize_area(i, w, h); };
   const Resize lanczos_srgb = [](const Image& i, uint32_t w, uint32_t h) { return resize_lanczos3(i, w, h, false); };
   const Resize lanczos_linear = [](const Image& i, uint32_t w, uint32_t h) { return resize_lanczos3(i, w, h, true); };
+  const Resize* users = nullptr;  // the input's winning resize, once its curve is done (it comes first)
   struct Curve {
     nlohmann::ordered_json points = nlohmann::ordered_json::array();
     std::vector<std::pair<double, double>> cq;  // (c_r, q) by increasing cost
@@ -471,7 +474,14 @@ nlohmann::ordered_json evaluate(const io::GltfFile& reference, const std::vector
       L["resize"] = name;
       L["resize_mean_log_q"] = {{"lanczos3-srgb", srgb.mean_log_q}, {"lanczos3-linear", linear.mean_log_q}};
       curve = use_linear ? std::move(linear) : std::move(srgb);
-      resize = use_linear ? &lanczos_linear : &lanczos_srgb;
+      resize = users = use_linear ? &lanczos_linear : &lanczos_srgb;
+    } else if (users && !e.paper_filter) {
+      // Every other layout's full texture is brought to each c_r by the same resize as the
+      // input's, so the curves differ by their layouts (and their full textures), not by
+      // the filter that shrinks them.
+      curve = run_curve(m, e.aspect, *users);
+      resize = users;
+      L["resize"] = report["input_resize"];
     } else {
       curve = run_curve(m, e.aspect, area);
       L["resize"] = "area";

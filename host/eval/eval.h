@@ -30,8 +30,9 @@
 // - Resize to that size: the input's texture as users' tools resize it, Lanczos-3
 //   (resize.h), in stored sRGB values and in linear light, both evaluated, the one with the
 //   lower mean log q over the grid kept (report: input_resize), so the baseline is the
-//   strongest a user gets in one line; every other layout's full texture with the exact
-//   area (box) filter (bilinear when enlarging), the paper's protocol. Then the 20 views
+//   strongest a user gets in one line; every other layout's full texture with that same
+//   resize, so that curves differ by layout and not by filter (only "input-rebaked", the
+//   paper's protocol, keeps the exact area (box) filter, bilinear when enlarging). Then the 20 views
 //   are rendered and q = mean GMSD against the reference views (eq. 22-23). GMSD:
 //   engine->gmsd for images up to 64 x 64, else engine/cpu/gmsd.h (fp32).
 // - As written: every other file is also scored with its own texture at its real size and

@@ -142,7 +142,7 @@ std::array<double, 4> jacobian_of(const double x[4], double lambda_min, double* 
 std::vector<double> measure_triangles(engine::Engine& engine, const TriangleViewInput& input,
                                       const std::vector<float>& texture, const TriangleStageOptions& o,
                                       const std::array<double, 4>& j, const std::vector<uint32_t>& which) {
-  TriangleViews tv = make_triangle_views(input, o.view_size, which, o.max_patches);
+  TriangleViews tv = make_triangle_views(input, o.view_size, which, o.max_patches, o.min_texels_per_pixel);
   tv.desc.texture = texture.data(), tv.desc.texture_width = input.texture_width;
   tv.desc.texture_height = input.texture_height;
   auto views = engine.prepare_views(tv.desc);
@@ -174,7 +174,7 @@ std::vector<TriangleResult> optimize_triangles(engine::Engine& engine, const Tri
     const size_t wave_end = std::min(all.size(), wave_start + o.wave);
     std::vector<uint32_t> wave(all.begin() + long(wave_start), all.begin() + long(wave_end));
     auto t0 = Clock::now();
-    TriangleViews tv = make_triangle_views(input, o.view_size, wave, o.max_patches);
+    TriangleViews tv = make_triangle_views(input, o.view_size, wave, o.max_patches, o.min_texels_per_pixel);
     engine::ViewSetDesc& desc = tv.desc;
     desc.texture = texture.data(), desc.texture_width = input.texture_width, desc.texture_height = input.texture_height;
     local.host_seconds += seconds_since(t0);

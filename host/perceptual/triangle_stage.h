@@ -29,6 +29,7 @@ namespace uvpress::perceptual {
 struct TriangleStageOptions {
   uint32_t view_size = 64;     // S, pixels a view side (the paper's 64)
   uint32_t max_patches = 4;    // views of a triangle too large to resolve in one (triangle_view.h)
+  double min_texels_per_pixel = 0;  // small triangles' views magnify no more than this (triangle_view.h; 0: the paper's)
   double epsilon = 0.01;       // GMSD bound (eq. 12)
   // Rate control: one bound per triangle of the mesh (indexed by triangle, overriding
   // `epsilon` when not empty), e.g. a little above the loss a plain resize would cause.

@@ -80,7 +80,7 @@ std::vector<std::array<double, 2>> clip(std::vector<std::array<double, 2>> poly,
 }  // namespace
 
 TriangleViews make_triangle_views(const TriangleViewInput& in, uint32_t size, const std::vector<uint32_t>& which,
-                                  uint32_t max_patches) {
+                                  uint32_t max_patches, double min_texels_per_pixel) {
   TriangleViews out;
   engine::ViewSetDesc& desc = out.desc;
   desc.size = size;
@@ -136,7 +136,7 @@ TriangleViews make_triangle_views(const TriangleViewInput& in, uint32_t size, co
     double w = hi_x - lo_x, h = hi_y - lo_y;
     if (w > h) lo_y -= (w - h) / 2, hi_y += (w - h) / 2;
     else lo_x -= (h - w) / 2, hi_x += (h - w) / 2;
-    const double side = std::max(w, h);
+    double side = std::max(w, h);
 
     // Texels per unit length along the worst direction: the largest singular value of
     // d(s, t)/d(x, y) over the triangle's plane.
@@ -161,6 +161,12 @@ TriangleViews make_triangle_views(const TriangleViewInput& in, uint32_t size, co
     // lies in the triangle (the centroid's square when none does), then at most
     // `max_patches` of them, evenly spread.
     // (At most kMaxPatchGrid a side: slivers with a large UV extent are not worth more.)
+    if (min_texels_per_pixel > 0 && sigma > 0 && side * sigma < min_texels_per_pixel * size) {
+      // Too magnified: widen the square about its centre to min_texels_per_pixel.
+      const double cx = lo_x + 0.5 * side, cy = hi_y - 0.5 * side;
+      side = min_texels_per_pixel * size / sigma;
+      lo_x = cx - 0.5 * side, hi_x = cx + 0.5 * side, lo_y = cy - 0.5 * side, hi_y = cy + 0.5 * side;
+    }
     const double grid = std::ceil(side * sigma / double(size) - 1e-9);
     const uint32_t n = uint32_t(std::clamp(grid, 1.0, double(kMaxPatchGrid)));
     std::vector<std::array<uint32_t, 2>> patches;

@@ -56,7 +56,15 @@ struct TriangleViews {
 // are unchanged by clipping); rings longer than kViewMaxTriangles keep the triangles
 // nearest the centre. Degenerate triangles (zero area in space) get a view with no pixels.
 // The texture pointer of the result is left for the caller to set.
+//
+// `min_texels_per_pixel` (0: the paper's view, the triangle's bounding square): a triangle
+// so small that its view would magnify its texels beyond this (e.g. 0.5: two pixels a
+// texel) is seen through a larger square about the same centre instead. GMSD compares
+// gradients against a fixed constant, so a view that spreads each texel over many pixels
+// flattens every gradient and scores a blur of the texture as nearly lossless; a view at
+// a fixed magnification scores a triangle as a screen would, whatever its size.
 TriangleViews make_triangle_views(const TriangleViewInput& input, uint32_t size,
-                                  const std::vector<uint32_t>& which = {}, uint32_t max_patches = 4);
+                                  const std::vector<uint32_t>& which = {}, uint32_t max_patches = 4,
+                                  double min_texels_per_pixel = 0);
 
 }  // namespace uvpress::perceptual

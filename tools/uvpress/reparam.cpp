@@ -79,8 +79,14 @@ void add_reparam(CLI::App& app, Globals& g) {
   cmd->add_option("--evaluations", o->triangle.evaluations, "GP-BO evaluations per triangle")->capture_default_str()->check(CLI::Range(11, 1000));
   cmd->add_option("--view-size", o->triangle.view_size, "Per-triangle view size in pixels")->capture_default_str()->check(CLI::IsMember({16u, 32u, 48u, 64u}));
   cmd->add_option("--seed", o->triangle.seed, "Seed of the Bayesian optimization")->capture_default_str();
+  cmd->add_option("--view-texels-per-pixel", o->triangle.min_texels_per_pixel,
+                  "Small triangles' views magnify their texels no more than this (0: the paper's bounding-square view)")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1.0));
   cmd->add_flag("--early-stop", o->triangle.early_stop, "Stop a triangle's search once it stalls (30+ evaluations, 25 without gain)");
   cmd->add_flag("--no-optimize", *no_optimize, "Keep every triangle's shape: only repack and re-bake");
+  cmd->add_flag("--no-candidates", [o](int64_t) { o->candidates = false; },
+                "Build only the paper's layout (no floored-stretch or repacked candidates to choose from)");
   cmd->add_flag("--force-reparam", [o](int64_t) { o->guard = false; },
                 "Write reparam's layout even when a plain resize to the same texels looks better");
   cmd->callback([&g, input, output, o, no_optimize] {
