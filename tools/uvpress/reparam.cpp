@@ -85,6 +85,8 @@ void add_reparam(CLI::App& app, Globals& g) {
       ->check(CLI::Range(0.0, 1.0));
   cmd->add_flag("--early-stop", o->triangle.early_stop, "Stop a triangle's search once it stalls (30+ evaluations, 25 without gain)");
   cmd->add_flag("--no-optimize", *no_optimize, "Keep every triangle's shape: only repack and re-bake");
+  cmd->add_flag("--resample-all", [o](int64_t) { o->exact_texels = false; },
+                "Resample every chart, also those that keep their shape (default: their texels are copied)");
   cmd->add_flag("--no-candidates", [o](int64_t) { o->candidates = false; },
                 "Build only the paper's layout (no floored-stretch or repacked candidates to choose from)");
   cmd->add_flag("--force-reparam", [o](int64_t) { o->guard = false; },
