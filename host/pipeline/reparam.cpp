@@ -287,7 +287,7 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
       size_t n = 0;
       for (const auto& set : P.results)
         for (const auto& r : set)
-          if (std::isfinite(r.weight_rotation) && std::isfinite(r.weight_stretch))
+          if (r.evaluations > 0 && std::isfinite(r.weight_rotation) && std::isfinite(r.weight_stretch))
             sum += r.weight_rotation + r.weight_stretch, n += 2;
       mesh_options.weight_floor = n ? 1e-3 * sum / double(n) : 0;
     }
@@ -603,43 +603,6 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
       for (size_t c = 0; c < prim.indices.size(); ++c) welded_of_vertex[si][prim.indices[c]] = welded.uv_triangles[c];
       atlas::Charts found = atlas::find_charts(welded);
 
-      // Triangle stage (kept per triangle; the candidates derive their targets from it).
-      if (o.optimize && prim.triangle_count() > 0) {
-        auto t0 = Clock::now();
-        perceptual::TriangleViewInput in{prim.positions.data(), prim.vertex_count(), prim.indices.data(),
-                                         prim.triangle_count(), uv.data(), driver.width, driver.height};
-        perceptual::TriangleStageOptions topt = o.triangle;
-        if (rate_scale > 0) {
-          // Rate control: each triangle may lose at most a little more than the plain resize
-          // to the requested cost would make it lose (its loss at J = sqrt(c) I, measured on
-          // its own views), so the optimizer only ever trades texels where the resize would
-          // have spent them for nothing.
-          const double s0 = rate_scale;
-          std::vector<double> g = perceptual::measure_triangles(engine, in, luminance, topt, {s0, 0, 0, s0});
-          topt.epsilons.resize(g.size());
-          for (size_t t = 0; t < g.size(); ++t) topt.epsilons[t] = std::max(o.rate_margin * g[t], o.rate_floor);
-          topt.start_scale = s0;
-          tri.rate_epsilons.insert(tri.rate_epsilons.end(), topt.epsilons.begin(), topt.epsilons.end());
-        }
-        if (progress) {
-          const std::string stage = "triangles (layout " + std::to_string(li) + ")";
-          topt.progress = [&progress, stage](size_t done, size_t total) { progress(stage, done, total); };
-        }
-        auto results = perceptual::optimize_triangles(engine, in, luminance, topt);
-        for (size_t t = 0; t < results.size(); ++t) {
-          const auto& r = results[t];
-          tri.optimized += 1;
-          tri.feasible += r.feasible;
-          if (!r.feasible) tri.infeasible_identity_gmsd.push_back(r.identity_gmsd);
-          tri.resolved += r.texels_per_pixel <= 1.0 + 1e-6;
-          tri.sampled += !r.complete;
-          tri.coarsened += r.identity_lattice > 1;
-          tri.lambda_area.push_back(r.lambda1 * r.lambda2);
-        }
-        P.results[si] = std::move(results);
-        t_triangle += seconds_since(t0);
-      }
-
       const size_t first_chart = charts.size();
       charts.resize(first_chart + found.count);
       for (size_t t = 0; t < prim.triangle_count(); ++t) charts[first_chart + found.chart_of_triangle[t]].triangles.push_back(uint32_t(t));
@@ -674,6 +637,56 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
     }
     find_shared_texels(P);
 
+    // Triangle stage, for the triangles of charts that may be reshaped (rigid charts and
+    // charts sharing texels keep their shape: optimizing them would be wasted work).
+    for (size_t si = 0; si < L.uv_sets.size(); ++si) {
+      const io::Primitive& prim = asset.primitives[size_t(L.uv_sets[si].primitive)];
+      const std::vector<float>& uv = prim.uv_sets[size_t(L.uv_sets[si].tex_coord)].uv;
+      std::vector<uint32_t> which;
+      for (const Chart& ch : charts)
+        if (ch.uv_set == si && !ch.rigid && !ch.shared) which.insert(which.end(), ch.triangles.begin(), ch.triangles.end());
+      std::sort(which.begin(), which.end());
+      // Kept per triangle (the candidates derive their targets from it).
+      if (o.optimize && !which.empty()) {
+        auto t0 = Clock::now();
+        perceptual::TriangleViewInput in{prim.positions.data(), prim.vertex_count(), prim.indices.data(),
+                                         prim.triangle_count(), uv.data(), driver.width, driver.height};
+        perceptual::TriangleStageOptions topt = o.triangle;
+        if (rate_scale > 0) {
+          // Rate control: each triangle may lose at most a little more than the plain resize
+          // to the requested cost would make it lose (its loss at J = sqrt(c) I, measured on
+          // its own views), so the optimizer only ever trades texels where the resize would
+          // have spent them for nothing.
+          const double s0 = rate_scale;
+          std::vector<double> g = perceptual::measure_triangles(engine, in, luminance, topt, {s0, 0, 0, s0}, which);
+          topt.epsilons.assign(prim.triangle_count(), o.triangle.epsilon);
+          for (size_t k = 0; k < which.size(); ++k) {
+            topt.epsilons[which[k]] = std::max(o.rate_margin * g[k], o.rate_floor);
+            tri.rate_epsilons.push_back(topt.epsilons[which[k]]);
+          }
+          topt.start_scale = s0;
+        }
+        if (progress) {
+          const std::string stage = "triangles (layout " + std::to_string(li) + ")";
+          topt.progress = [&progress, stage](size_t done, size_t total) { progress(stage, done, total); };
+        }
+        auto results = perceptual::optimize_triangles(engine, in, luminance, topt, which);
+        P.results[si].assign(prim.triangle_count(), perceptual::TriangleResult{});  // evaluations 0: not optimized
+        for (size_t k = 0; k < results.size(); ++k) {
+          const auto& r = results[k];
+          tri.optimized += 1;
+          tri.feasible += r.feasible;
+          if (!r.feasible) tri.infeasible_identity_gmsd.push_back(r.identity_gmsd);
+          tri.resolved += r.texels_per_pixel <= 1.0 + 1e-6;
+          tri.sampled += !r.complete;
+          tri.coarsened += r.identity_lattice > 1;
+          tri.lambda_area.push_back(r.lambda1 * r.lambda2);
+        }
+        for (size_t k = 0; k < results.size(); ++k) P.results[si][which[k]] = std::move(results[k]);
+        t_triangle += seconds_since(t0);
+      }
+    }
+
     optimized += P.tri.optimized, infeasible += P.tri.optimized - P.tri.feasible;
   }
 
@@ -682,8 +695,10 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
   // (20 views against the input, eval's protocol); the best is kept. --max-gmsd sizes one
   // layout on its own curve instead.
   std::vector<Candidate> plans;
-  if (o.optimize) plans.push_back({"optimized", true, 0.0});
-  if (o.max_gmsd <= 0 && !prepared.empty() && o.candidates && o.optimize) {
+  // Nothing to reshape (every chart rigid or sharing texels): the repack is every candidate.
+  const bool reshape = o.optimize && (optimized > 0 || o.max_gmsd > 0);
+  if (reshape) plans.push_back({"optimized", true, 0.0});
+  if (o.max_gmsd <= 0 && !prepared.empty() && o.candidates && reshape) {
     // The triangle stage's rotations are its least reliable output (a triangle whose loss
     // barely depends on alpha still gets an alpha, and neighbours' disagreeing rotations
     // shear the chart): measured on Fox at half the texels, stretch-only targets score q
@@ -692,7 +707,7 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
     plans.push_back({"stretch-only-0.5", true, 0.5, false, false});
     plans.push_back({"floor-0.5", true, 0.5});
   }
-  if (!o.optimize || (o.max_gmsd <= 0 && o.candidates)) plans.push_back({"repack", false, 1.0});
+  if (!reshape || (o.max_gmsd <= 0 && o.candidates)) plans.push_back({"repack", false, 1.0});
   eval::EvalOptions score_options;
   score_options.artifacts = false;
   std::vector<Realized> built;
