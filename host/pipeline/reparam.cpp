@@ -757,6 +757,18 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
       if (built.back().q < built[best].q) best = built.size() - 1;
     }
   }
+  if (!o.curve_costs.empty() && score_failure.empty() && !prepared.empty() && built[best].q >= 0) {
+    json curve = json::array(), ignored = json::array();
+    for (double c : o.curve_costs) {
+      ReparamOptions at = o;
+      at.cost = c, at.size = 0;
+      io::GltfFile f = original;
+      realize(asset, layouts, prepared, layout_base, f, engine, at, plans[best], {}, ignored);
+      const auto scored = eval::score_as_written(original, f, engine, score_options);
+      curve.push_back({{"c_r", scored.c_r}, {"q", scored.q}});
+    }
+    report["curve"] = curve;
+  }
   json candidates = json::array();
   for (const Realized& r : built)
     candidates.push_back({{"name", r.name},

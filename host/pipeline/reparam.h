@@ -45,6 +45,10 @@ struct ReparamOptions {
   // Charts that keep their shape keep their texels: copied from the source resized to the
   // layout's scale (Lanczos-3), whole-texel placements (atlas/place_texels.h).
   bool exact_texels = true;
+  // When not empty (bench quality): the kept layout is also built at each of these costs
+  // (its shapes as they are, only the budget changes) and scored as written: the report's
+  // `curve` [{c_r, q}], reparam's own q-c curve.
+  std::vector<double> curve_costs;
   perceptual::TriangleStageOptions triangle;
 };
 
