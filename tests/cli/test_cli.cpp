@@ -112,6 +112,15 @@ TEST_CASE("CLI: demo writes the asset, its reparam and the eval report", "[cli][
   CHECK(report["reparam"]["flips"] == 0);
   CHECK(report["reparam"]["cost_ratio"].get<double>() <= 0.52);
   CHECK(report["eval"]["layouts"].size() == 3);  // input, reparam, flatten
+  // The verdict against a plain resize, from reparam's own curve, on the summary's last lines.
+  REQUIRE(report["reparam"]["curve"].size() == report["eval"]["cost_grid"].size());
+  if (report["pixels_vs_resize_at_equal_q"].is_number()) {
+    const double ratio = report["pixels_vs_resize_at_equal_q"].get<double>();
+    CHECK(ratio > 0);
+    CHECK_THAT(r.out, Catch::Contains(ratio <= 1 ? "demo: reparam saves" : "demo: reparam needs"));
+  } else {
+    CHECK_THAT(r.out, Catch::Contains("share no quality range"));
+  }
 }
 
 TEST_CASE("CLI: bench luminance prints one JSON line per backend, validation clean", "[cli][vulkan]") {
