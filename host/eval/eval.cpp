@@ -114,6 +114,15 @@ Savings pixel_ratio_at_equal_q(const std::vector<std::pair<double, double>>& a,
   return s;
 }
 
+Savings pixel_ratio_at_equal_q(const nlohmann::ordered_json& a, const nlohmann::ordered_json& b) {
+  auto points = [](const nlohmann::ordered_json& curve) {
+    std::vector<std::pair<double, double>> cq;
+    for (const auto& p : curve) cq.push_back({p["c_r"].get<double>(), p["q"].get<double>()});
+    return cq;
+  };
+  return pixel_ratio_at_equal_q(points(a), points(b));
+}
+
 namespace {
 
 struct Timing {
@@ -298,11 +307,28 @@ Image uv_plot(const LayoutMesh& m, double aspect, double* spread) {
 
 }  // namespace
 
+struct AsWrittenScorer::State {
+  engine::Engine& engine;
+  uint32_t resolution;
+  Timing timing;
+  Setup setup;
+};
+
+AsWrittenScorer::AsWrittenScorer(const io::GltfFile& reference, engine::Engine& engine, const EvalOptions& o)
+    : state_(new State{engine, o.resolution, {}, {}}) {
+  state_->setup = set_up(reference, engine, o, state_->timing);
+}
+
+AsWrittenScorer::~AsWrittenScorer() = default;
+
+Scored AsWrittenScorer::score(const io::GltfFile& candidate) {
+  return score_own(state_->engine, state_->setup, detail::extract_layout(candidate, "candidate"), state_->resolution,
+                   state_->timing);
+}
+
 Scored score_as_written(const io::GltfFile& reference, const io::GltfFile& candidate, engine::Engine& engine,
                         const EvalOptions& o) {
-  Timing timing;
-  const Setup s = set_up(reference, engine, o, timing);
-  return score_own(engine, s, detail::extract_layout(candidate, "candidate"), o.resolution, timing);
+  return AsWrittenScorer(reference, engine, o).score(candidate);
 }
 
 nlohmann::ordered_json evaluate(const io::GltfFile& reference, const std::vector<LayoutInput>& others,

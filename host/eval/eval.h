@@ -50,6 +50,7 @@
 #include <nlohmann/json.hpp>
 
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -113,6 +114,19 @@ struct Scored {
 Scored score_as_written(const io::GltfFile& reference, const io::GltfFile& candidate, engine::Engine& engine,
                         const EvalOptions& options = {});
 
+// The same, for many candidates against one reference: the reference's layout, cameras and
+// 20 views are set up once (score_as_written sets them up per call). Not thread-safe.
+class AsWrittenScorer {
+ public:
+  AsWrittenScorer(const io::GltfFile& reference, engine::Engine& engine, const EvalOptions& options = {});
+  ~AsWrittenScorer();
+  Scored score(const io::GltfFile& candidate);
+
+ private:
+  struct State;
+  std::unique_ptr<State> state_;
+};
+
 // Writes DIR/index.html (offline: no scripts, no network), DIR/plot.svg (log q_r against
 // c_r by gnuplot when it is installed, each layout's as-written point marked; the report
 // says when gnuplot is not installed), DIR/contact-*.png
@@ -137,5 +151,8 @@ struct Savings {
 };
 Savings pixel_ratio_at_equal_q(const std::vector<std::pair<double, double>>& a,
                                const std::vector<std::pair<double, double>>& b);
+// The same for two curves as reports hold them: arrays of {c_r, q} by increasing c_r (an
+// eval layout's `curve`, reparam's `curve`).
+Savings pixel_ratio_at_equal_q(const nlohmann::ordered_json& a, const nlohmann::ordered_json& b);
 
 }  // namespace uvpress::eval

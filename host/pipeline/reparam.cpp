@@ -708,75 +708,73 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
     plans.push_back({"floor-0.5", true, 0.5});
   }
   if (!reshape || (o.max_gmsd <= 0 && o.candidates)) plans.push_back({"repack", false, 1.0});
-  eval::EvalOptions score_options;
-  score_options.artifacts = false;
-  std::vector<Realized> built;
-  std::string score_failure;
+  // Scored as written against the input, the input's layout and 20 views set up once.
   const bool scoring = !prepared.empty() && (plans.size() > 1 || (o.max_gmsd <= 0 && (o.guard || o.least_squares_bake)));
-  std::vector<io::GltfFile> files;
+  std::unique_ptr<eval::AsWrittenScorer> scorer;
+  std::string score_failure;
   double t_score = 0;
-  for (const Candidate& c : plans) {
-    files.push_back(original);
-    built.push_back(realize(asset, layouts, prepared, layout_base, files.back(), engine, o, c, progress, warnings));
-    if (score_failure.empty() && scoring) {
-      auto t0 = Clock::now();
-      try {
-        built.back().q = eval::score_as_written(original, files.back(), engine, score_options).q;
-      } catch (const InputError& e) {
-        // eval cannot score this asset (e.g. no UV area to frame): keep the paper's layout,
-        // skip the guard, and say so.
-        score_failure = e.what();
-        warnings.push_back("candidates and the resize guard skipped: eval cannot score this asset (" + score_failure + ")");
-      }
-      t_score += seconds_since(t0);
+  if (scoring) {
+    auto t0 = Clock::now();
+    eval::EvalOptions score_options;
+    score_options.artifacts = false;
+    try {
+      scorer = std::make_unique<eval::AsWrittenScorer>(original, engine, score_options);
+    } catch (const InputError& e) {
+      // eval cannot score this asset (e.g. no UV area to frame): keep the paper's layout,
+      // skip the guard, and say so.
+      score_failure = e.what();
+      warnings.push_back("candidates and the resize guard skipped: eval cannot score this asset (" + score_failure + ")");
     }
+    t_score += seconds_since(t0);
   }
-  if (!score_failure.empty())
-    for (Realized& r : built) r.q = -1;
-  size_t best = 0;
-  for (size_t k = 1; k < built.size(); ++k)
-    if (built[k].q >= 0 && built[k].q < built[best].q) best = k;
+  auto score = [&](const io::GltfFile& f) {
+    auto t0 = Clock::now();
+    const eval::Scored scored = scorer->score(f);
+    t_score += seconds_since(t0);
+    return scored;
+  };
+  // Builds a candidate, scores it, and keeps it when it is the first or scores better.
+  json candidates = json::array();
+  Realized chosen;
+  Candidate chosen_plan;
+  bool have = false;
+  auto consider = [&](const Candidate& c) {
+    io::GltfFile f = original;
+    Realized r = realize(asset, layouts, prepared, layout_base, f, engine, o, c, progress, warnings);
+    if (scorer) r.q = score(f).q;
+    candidates.push_back({{"name", r.name},
+                          {"cost_ratio", r.old_texels > 0 ? r.new_texels / r.old_texels : 1.0},
+                          {"q", r.q >= 0 ? json(r.q) : json(nullptr)}});
+    if (!have || (r.q >= 0 && r.q < chosen.q)) chosen = std::move(r), file = std::move(f), chosen_plan = c, have = true;
+  };
+  for (const Candidate& c : plans) consider(c);
   // The kept layout once more with the least-squares re-bake (the texels whose bilinear
   // reconstruction is closest to the source over the surface), with the unreshaped charts'
   // texels copied and with them solved too: a copy at a fractional scale can blur edges a
   // fit keeps (MultiUVTest at half the texels: q 0.0040 copied, 0.0020 solved). Each is
   // kept only if it scores better.
-  if (score_failure.empty() && built[best].q >= 0 && o.least_squares_bake && o.max_gmsd <= 0) {
-    const size_t kept = best;
+  if (scorer && o.least_squares_bake && o.max_gmsd <= 0) {
+    const Candidate kept = chosen_plan;
     for (bool exact : {true, false}) {
       if (!exact && !o.exact_texels) break;  // the same as the first
-      Candidate c = plans[kept];
+      Candidate c = kept;
       c.name += exact ? "+least-squares" : "+least-squares-resampled";
       c.least_squares = true, c.exact = exact;
-      plans.push_back(c);
-      files.push_back(original);
-      built.push_back(realize(asset, layouts, prepared, layout_base, files.back(), engine, o, c, progress, warnings));
-      auto t0 = Clock::now();
-      built.back().q = eval::score_as_written(original, files.back(), engine, score_options).q;
-      t_score += seconds_since(t0);
-      if (built.back().q < built[best].q) best = built.size() - 1;
+      consider(c);
     }
   }
-  if (!o.curve_costs.empty() && score_failure.empty() && !prepared.empty() && built[best].q >= 0) {
+  if (!o.curve_costs.empty() && scorer) {
     json curve = json::array(), ignored = json::array();
     for (double c : o.curve_costs) {
       ReparamOptions at = o;
       at.cost = c, at.size = 0;
       io::GltfFile f = original;
-      realize(asset, layouts, prepared, layout_base, f, engine, at, plans[best], {}, ignored);
-      const auto scored = eval::score_as_written(original, f, engine, score_options);
+      realize(asset, layouts, prepared, layout_base, f, engine, at, chosen_plan, {}, ignored);
+      const auto scored = score(f);
       curve.push_back({{"c_r", scored.c_r}, {"q", scored.q}});
     }
     report["curve"] = curve;
   }
-  json candidates = json::array();
-  for (const Realized& r : built)
-    candidates.push_back({{"name", r.name},
-                          {"cost_ratio", r.old_texels > 0 ? r.new_texels / r.old_texels : 1.0},
-                          {"q", r.q >= 0 ? json(r.q) : json(nullptr)}});
-  Realized chosen = std::move(built[best]);
-  file = std::move(files[best]);
-  files.clear();
   if (layout_out) *layout_out = file;
 
   // The guard: the same texels spent on a plain resize of the input (Lanczos-3, what users'
@@ -784,14 +782,14 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
   json guard = nullptr;
   std::string chosen_by = prepared.empty() ? "untouched" : "reparam";
   if (!score_failure.empty()) guard = {{"skipped", score_failure}};
-  if (o.guard && o.max_gmsd <= 0 && !prepared.empty() && score_failure.empty()) {
+  if (o.guard && o.max_gmsd <= 0 && scorer) {
     auto t0 = Clock::now();
     std::vector<std::pair<int, std::array<uint32_t, 2>>> sizes;
     for (const auto& t : chosen.textures) sizes.push_back({t["image"].get<int>(), {t["new_size"][0].get<uint32_t>(), t["new_size"][1].get<uint32_t>()}});
     io::GltfFile resized = original;
     resize_images(resized, sizes);
-    const double q_resize = eval::score_as_written(original, resized, engine, score_options).q;
-    t_score += seconds_since(t0);
+    t_score += seconds_since(t0);  // the resize; score() counts itself
+    const double q_resize = score(resized).q;
     guard = {{"q_reparam", chosen.q}, {"q_resize", q_resize}, {"resize", "lanczos3-srgb"}};
     if (!(chosen.q < q_resize)) {
       chosen_by = "resize";

@@ -95,17 +95,11 @@ void add_bench_quality(CLI::App& bench, Globals& g) {
           // cost, scored as written, against the input's resize curve and the isometric
           // layout's curve. Beside them, eval's protocol (the layout's full texture re-baked
           // from the input at c_r 1, then resized), which charges every layout a re-bake.
-          auto points = [](const nlohmann::ordered_json& curve) {
-            std::vector<std::pair<double, double>> cq;
-            for (const auto& p : curve) cq.push_back({p["c_r"].get<double>(), p["q"].get<double>()});
-            return cq;
-          };
-          const auto own = points(report["curve"]);
           line["ratio_vs_resize"] = nullptr, line["ratio_vs_isometric"] = nullptr;
           for (const auto& L : ev["layouts"]) {
             const std::string name = L["name"];
             if (name != "input" && name != "flatten") continue;
-            const auto s = eval::pixel_ratio_at_equal_q(own, points(L["curve"]));
+            const auto s = eval::pixel_ratio_at_equal_q(report["curve"], L["curve"]);
             const std::string key = name == "input" ? "ratio_vs_resize" : "ratio_vs_isometric";
             if (s.points) line[key] = s.ratio;
             else line[key] = nullptr, why += "reparam's curve and " + name + "'s share no q range; ";

@@ -75,10 +75,7 @@ void add_demo(CLI::App& app, Globals& g) {
       // written) against the input's resize curve, both at eval's resolution.
       nlohmann::ordered_json verdict = nullptr;
       if (report.contains("curve")) {
-        std::vector<std::pair<double, double>> own, resize;
-        for (const auto& p : report["curve"]) own.push_back({p["c_r"].get<double>(), p["q"].get<double>()});
-        for (const auto& p : evaluation["layouts"][0]["curve"]) resize.push_back({p["c_r"].get<double>(), p["q"].get<double>()});
-        const auto sv = eval::pixel_ratio_at_equal_q(own, resize);
+        const auto sv = eval::pixel_ratio_at_equal_q(report["curve"], evaluation["layouts"][0]["curve"]);
         if (sv.points) {
           verdict = sv.ratio;
           if (sv.ratio <= 1)
