@@ -35,8 +35,12 @@ bool triangle_overlaps_box(const double a[2], const double b[2], const double c[
 std::array<double, 2> Packing::map(size_t chart, double x, double y) const {
   const ChartPlacement& p = placements[chart];
   const double sx = scale * x, sy = scale * y;
-  if (p.rotation == 0) return {sx + p.tx, sy + p.ty};
-  return {-sy + p.tx, sx + p.ty};
+  switch (p.rotation) {
+    case 0: return {sx + p.tx, sy + p.ty};
+    case 1: return {-sy + p.tx, sx + p.ty};
+    case 2: return {-sx + p.tx, -sy + p.ty};
+    default: return {sy + p.tx, -sx + p.ty};
+  }
 }
 
 std::array<double, 2> Packing::map_uv(size_t chart, double x, double y) const {
@@ -54,7 +58,28 @@ struct Footprint {
   double min_x = 0, min_y = 0; // texels: the scaled chart's minimum corner
   double area = 0;             // scaled triangle area, texels^2
   uint32_t count = 0;          // set cells
+  uint64_t covered = 0;        // texels whose centre some triangle covers (overlaps once)
 };
+
+// Texel centres (x + 1/2, y + 1/2) inside triangle v (texel units), marked in `mask`
+// (width x height texels): per texel row, the centres between the two edge crossings.
+void mark_centres(const double v[3][2], uint32_t width, uint32_t height, std::vector<uint8_t>& mask) {
+  const double lo = std::min({v[0][1], v[1][1], v[2][1]}), hi = std::max({v[0][1], v[1][1], v[2][1]});
+  const int j0 = std::max(0, int(std::ceil(lo - 0.5))), j1 = std::min(int(height) - 1, int(std::floor(hi - 0.5)));
+  for (int j = j0; j <= j1; ++j) {
+    const double yc = j + 0.5;
+    double xl = std::numeric_limits<double>::infinity(), xr = -xl;
+    for (int k = 0; k < 3; ++k) {
+      const double* p = v[k];
+      const double* q = v[(k + 1) % 3];
+      if ((p[1] - yc) * (q[1] - yc) > 0 || p[1] == q[1]) continue;
+      const double x = p[0] + (q[0] - p[0]) * (yc - p[1]) / (q[1] - p[1]);
+      xl = std::min(xl, x), xr = std::max(xr, x);
+    }
+    const int i0 = std::max(0, int(std::ceil(xl - 0.5))), i1 = std::min(int(width) - 1, int(std::floor(xr - 0.5)));
+    for (int i = i0; i <= i1; ++i) mask[size_t(j) * width + size_t(i)] = 1;
+  }
+}
 
 Footprint rasterize(const ChartShape& chart, double scale, uint32_t block) {
   Footprint f;
@@ -78,6 +103,7 @@ Footprint rasterize(const ChartShape& chart, double scale, uint32_t block) {
   f.w = std::max<uint32_t>(1, uint32_t(std::ceil((Mx - mx) * inv - 1e-9)));
   f.h = std::max<uint32_t>(1, uint32_t(std::ceil((My - my) * inv - 1e-9)));
   f.cells.assign(size_t(f.w) * f.h, 0);
+  std::vector<uint8_t> centres(size_t(f.w) * block * f.h * block, 0);
   for (size_t t = 0; t + 2 < chart.triangles.size(); t += 3) {
     double v[3][2];
     bool bad = false;
@@ -93,17 +119,39 @@ Footprint rasterize(const ChartShape& chart, double scale, uint32_t block) {
     if (bad) continue;
     const double area2 = (v[1][0] - v[0][0]) * (v[2][1] - v[0][1]) - (v[1][1] - v[0][1]) * (v[2][0] - v[0][0]);
     f.area += 0.5 * std::abs(area2) * block * block;
+    if (area2 != 0) {
+      const double vt[3][2] = {{v[0][0] * block, v[0][1] * block}, {v[1][0] * block, v[1][1] * block}, {v[2][0] * block, v[2][1] * block}};
+      mark_centres(vt, f.w * block, f.h * block, centres);
+    }
     const double lox = std::min({v[0][0], v[1][0], v[2][0]}), hix = std::max({v[0][0], v[1][0], v[2][0]});
     const double loy = std::min({v[0][1], v[1][1], v[2][1]}), hiy = std::max({v[0][1], v[1][1], v[2][1]});
     const int x0 = std::max(0, int(std::floor(lox))), x1 = std::min(int(f.w) - 1, int(std::ceil(hix)));
     const int y0 = std::max(0, int(std::floor(loy))), y1 = std::min(int(f.h) - 1, int(std::ceil(hiy)));
-    for (int y = y0; y <= y1; ++y)
-      for (int x = x0; x <= x1; ++x) {
-        uint8_t& c = f.cells[size_t(y) * f.w + x];
-        if (!c && triangle_overlaps_box(v[0], v[1], v[2], x, y, x + 1, y + 1)) c = 1;
+    // Per row, the cells a triangle overlaps are one run (the triangle cut to the row's slab
+    // is convex): the exact test finds its two ends, the cells between are filled.
+    for (int y = y0; y <= y1; ++y) {
+      // The triangle's x-extent within the slab [y, y + 1]: vertices inside it and the
+      // edges' crossings of its two lines; the exact test then settles the end cells.
+      double sl = std::numeric_limits<double>::infinity(), sr = -sl;
+      for (int k = 0; k < 3; ++k) {
+        const double* p = v[k];
+        const double* q = v[(k + 1) % 3];
+        if (p[1] >= y && p[1] <= y + 1) sl = std::min(sl, p[0]), sr = std::max(sr, p[0]);
+        for (const double line : {double(y), double(y + 1)})
+          if ((p[1] - line) * (q[1] - line) < 0) {
+            const double x = p[0] + (q[0] - p[0]) * (line - p[1]) / (q[1] - p[1]);
+            sl = std::min(sl, x), sr = std::max(sr, x);
+          }
       }
+      if (!(sl <= sr)) continue;
+      int a = std::max(x0, int(std::floor(sl)) - 1), e = std::min(x1, int(std::ceil(sr)));
+      while (a <= e && !triangle_overlaps_box(v[0], v[1], v[2], a, y, a + 1, y + 1)) ++a;
+      while (e > a && !triangle_overlaps_box(v[0], v[1], v[2], e, y, e + 1, y + 1)) --e;
+      if (a <= e) std::fill(f.cells.begin() + ptrdiff_t(size_t(y) * f.w + size_t(a)), f.cells.begin() + ptrdiff_t(size_t(y) * f.w + size_t(e) + 1), uint8_t(1));
+    }
   }
   for (uint8_t c : f.cells) f.count += c;
+  for (uint8_t c : centres) f.covered += c;
   if (f.count == 0) {  // only degenerate triangles
     f.cells[0] = 1;
     f.count = 1;
@@ -111,144 +159,318 @@ Footprint rasterize(const ChartShape& chart, double scale, uint32_t block) {
   return f;
 }
 
-// One orientation of a footprint as column profiles. Cell columns/rows of the footprint F
-// and of D, F dilated by g cells (D column c = F column c - g; D row r = F row r - g).
-struct Profile {
-  uint32_t fw = 0, fh = 0;        // F size in cells
-  std::vector<int32_t> fbot;      // per F column: last set row, -1 if empty
-  std::vector<int32_t> dtop;      // per D column (fw + 2g): first row of D, INT32_MAX if empty
-  int32_t dh = 0;                 // D height: fh + 2g
+// Cells that a new footprint cell may not take: within the gutter of a placed footprint
+// (Chebyshev distance <= g cells) or of the image edge. One bit per cell, rows of 64-bit
+// words, so that a footprint row is tested against a run of cells a word at a time.
+class Blocked {
+ public:
+  Blocked(int32_t w, int32_t h) : w_(w), h_(h), words_((size_t(w) + 63) / 64), bits_(words_ * size_t(h), 0) {}
+
+  // Sets cells [a, b] of row y (clipped to the atlas).
+  void set(int32_t y, int32_t a, int32_t b) {
+    if (y < 0 || y >= h_) return;
+    a = std::max(a, 0), b = std::min(b, w_ - 1);
+    if (a > b) return;
+    uint64_t* row = &bits_[size_t(y) * words_];
+    const int32_t wa = a >> 6, wb = b >> 6;
+    for (int32_t k = wa; k <= wb; ++k) {
+      const int32_t lo = k == wa ? a & 63 : 0, hi = k == wb ? b & 63 : 63;
+      row[k] |= (hi == 63 ? ~uint64_t(0) : (uint64_t(1) << (hi + 1)) - 1) & ~((uint64_t(1) << lo) - 1);
+    }
+  }
+
+  // The first blocked (or, with free, unblocked) cell of row y in [a, b] (inside the
+  // atlas), or -1.
+  int32_t first(int32_t y, int32_t a, int32_t b, bool free = false) const {
+    const uint64_t* row = &bits_[size_t(y) * words_];
+    const int32_t wa = a >> 6, wb = b >> 6;
+    for (int32_t k = wa; k <= wb; ++k) {
+      uint64_t m = free ? ~row[k] : row[k];
+      if (k == wa) m &= ~((uint64_t(1) << (a & 63)) - 1);
+      if (k == wb && (b & 63) != 63) m &= (uint64_t(1) << ((b & 63) + 1)) - 1;
+      if (m) return (k << 6) + __builtin_ctzll(m);
+    }
+    return -1;
+  }
+
+  // The first p >= from with cells [p, p + len) of row y unblocked and inside the atlas,
+  // or -1: each blocked cell found moves p past it.
+  int32_t next_free_run(int32_t y, int32_t from, int32_t len) const {
+    for (int32_t p = from; p + len <= w_;) {
+      p = first(y, p, w_ - 1, true);
+      if (p < 0 || p + len > w_) return -1;
+      const int32_t c = first(y, p, p + len - 1);
+      if (c < 0) return p;
+      p = c + 1;
+    }
+    return -1;
+  }
+
+  // Blocked cells in all.
+  uint64_t count() const {
+    uint64_t n = 0;
+    for (uint64_t word : bits_) n += uint64_t(__builtin_popcountll(word));
+    return n;
+  }
+
+  // The longest run of unblocked cells in row y.
+  int32_t longest_free(int32_t y) const {
+    int32_t best = 0;
+    for (int32_t x = 0; x < w_;) {
+      const int32_t z = first(y, x, w_ - 1, true);
+      if (z < 0) break;
+      int32_t e = first(y, z, w_ - 1);
+      if (e < 0) e = w_;
+      best = std::max(best, e - z);
+      x = e;
+    }
+    return best;
+  }
+
+ private:
+  int32_t w_, h_;
+  size_t words_;
+  std::vector<uint64_t> bits_;
 };
 
-Profile profile_of(const Footprint& f, bool rotated, uint32_t g) {
-  Profile p;
-  p.fw = rotated ? f.h : f.w;
-  p.fh = rotated ? f.w : f.h;
-  auto cell = [&](uint32_t x, uint32_t y) -> bool {
-    // Rotated cell (x, y) is original cell (y, h - 1 - x).
-    return rotated ? f.cells[size_t(f.h - 1 - x) * f.w + y] != 0 : f.cells[size_t(y) * f.w + x] != 0;
+// One orientation of a footprint: its size in cells and its set cells as runs per row.
+struct Oriented {
+  int32_t fw = 0, fh = 0;
+  struct Run {
+    int32_t row, a, b;  // cells [a, b] of row `row` are set
   };
-  std::vector<int32_t> ftop(p.fw, INT32_MAX);
-  p.fbot.assign(p.fw, -1);
-  for (uint32_t x = 0; x < p.fw; ++x)
-    for (uint32_t y = 0; y < p.fh; ++y)
-      if (cell(x, y)) {
-        ftop[x] = std::min<int32_t>(ftop[x], y);
-        p.fbot[x] = y;
-      }
-  const uint32_t dw = p.fw + 2 * g;
-  p.dtop.assign(dw, INT32_MAX);
-  for (uint32_t c = 0; c < dw; ++c) {
-    const int lo = std::max(0, int(c) - int(2 * g)), hi = std::min(int(p.fw) - 1, int(c));
-    for (int j = lo; j <= hi; ++j) p.dtop[c] = std::min(p.dtop[c], ftop[j]);
+  std::vector<Run> runs;  // widest first: the likeliest to collide is tested first
+  // The rows with the widest runs, and those widths: a row of the atlas whose longest
+  // free run is shorter rules out every position that puts such a row there.
+  std::array<Run, 3> widest{};
+  size_t widest_count = 0;
+};
+
+// The runs of set cells along rows (columns = false) or columns of a footprint:
+// {line, first, last} with line the row (column) and first..last the columns (rows).
+std::vector<Oriented::Run> runs_of(const Footprint& f, bool columns) {
+  std::vector<Oriented::Run> runs;
+  const int32_t lines = int32_t(columns ? f.w : f.h), len = int32_t(columns ? f.h : f.w);
+  auto cell = [&](int32_t line, int32_t i) {
+    return (columns ? f.cells[size_t(i) * f.w + size_t(line)] : f.cells[size_t(line) * f.w + size_t(i)]) != 0;
+  };
+  for (int32_t line = 0; line < lines; ++line)
+    for (int32_t i = 0; i < len; ++i) {
+      if (!cell(line, i)) continue;
+      int32_t e = i;
+      while (e + 1 < len && cell(line, e + 1)) ++e;
+      runs.push_back({line, i, e});
+      i = e;
+    }
+  return runs;
+}
+
+// Orientation k of a footprint from its row and column runs. After k quarter turns
+// (R_1 (x, y) = (-y, x)), cell (x, y) is original cell k = 1: (y, h - 1 - x); k = 2:
+// (w - 1 - x, h - 1 - y); k = 3: (w - 1 - y, x). So turned rows are original rows (k even)
+// or columns (k odd), mirrored where the formula has a minus.
+Oriented orient(const Footprint& f, const std::vector<Oriented::Run>& rows, const std::vector<Oriented::Run>& columns,
+                uint32_t k) {
+  Oriented o;
+  o.fw = int32_t(k % 2 ? f.h : f.w);
+  o.fh = int32_t(k % 2 ? f.w : f.h);
+  const int32_t w = int32_t(f.w), h = int32_t(f.h);
+  o.runs.reserve(k % 2 ? columns.size() : rows.size());
+  switch (k) {
+    case 0: o.runs = rows; break;
+    case 1: for (const auto& r : columns) o.runs.push_back({r.row, h - 1 - r.b, h - 1 - r.a}); break;
+    case 2: for (const auto& r : rows) o.runs.push_back({h - 1 - r.row, w - 1 - r.b, w - 1 - r.a}); break;
+    default: for (const auto& r : columns) o.runs.push_back({w - 1 - r.row, r.a, r.b}); break;
   }
-  p.dh = int32_t(p.fh + 2 * g);
+  std::stable_sort(o.runs.begin(), o.runs.end(), [](const Oriented::Run& p, const Oriented::Run& q) { return p.b - p.a > q.b - q.a; });
+  for (const Oriented::Run& r : o.runs) {
+    if (o.widest_count == o.widest.size()) break;
+    bool seen = false;
+    for (size_t k = 0; k < o.widest_count; ++k) seen |= o.widest[k].row == r.row;
+    if (!seen) o.widest[o.widest_count++] = r;
+  }
+  return o;
+}
+
+// The first free position of `o` in reading order (lowest row, then leftmost column), or
+// {-1, -1}. A position (x, y) is free when no run lands on a blocked cell; a run that does
+// rules out every x' <= (blocked cell) - a, so the scan jumps past it (a row of the atlas
+// costs a few jumps, not a test per column).
+std::array<int32_t, 2> first_fit(const Blocked& blocked, const std::vector<int32_t>& longest, const Oriented& o,
+                                 int32_t wc, int32_t hc, int32_t y_end) {
+  if (o.fw > wc || o.fh > hc || o.runs.empty()) return {-1, -1};
+  for (int32_t y = 0; y + o.fh <= hc && y < y_end; ++y) {
+    bool room = true;
+    for (size_t k = 0; k < o.widest_count && room; ++k) room = longest[size_t(y + o.widest[k].row)] > o.widest[k].b - o.widest[k].a;
+    if (!room) continue;
+    int32_t x = 0;
+    size_t hint = 0;  // the run that collided last is tried first
+    while (x + o.fw <= wc) {
+      bool fits = true;
+      for (size_t k = 0; k < o.runs.size(); ++k) {
+        const Oriented::Run& r = o.runs[(hint + k) % o.runs.size()];
+        if (blocked.first(y + r.row, x + r.a, x + r.b) < 0) continue;
+        // Move to where this run fits in its row: no position in between can.
+        const int32_t p = blocked.next_free_run(y + r.row, x + r.a, r.b - r.a + 1);
+        x = p < 0 ? wc : p - r.a;
+        hint = (hint + k) % o.runs.size();
+        fits = false;
+        break;
+      }
+      if (fits) return {x, y};
+    }
+  }
+  return {-1, -1};
+}
+
+// Every chart's footprint at one scale, in its four orientations: rasterized once and
+// placed into as many atlas sizes as the search tries.
+struct Prints {
+  double scale = 1;
+  uint32_t block = 1;
+  double area = 0;  // sum of scaled triangle areas, texels^2
+  double covered = 0;  // texels under the charts
+  std::vector<Footprint> prints;
+  std::vector<std::array<Oriented, 4>> oriented;
+};
+
+Prints rasterize_all(const std::vector<ChartShape>& charts, double scale, const PackOptions& options) {
+  Prints p;
+  p.scale = scale;
+  p.block = std::max<uint32_t>(1, options.block);
+  p.prints.resize(charts.size());
+  p.oriented.resize(charts.size());
+  for (size_t i = 0; i < charts.size(); ++i) {
+    p.prints[i] = rasterize(charts[i], scale, p.block);
+    p.area += p.prints[i].area;
+    p.covered += double(p.prints[i].covered);
+    const auto rows = runs_of(p.prints[i], false), columns = options.rotate ? runs_of(p.prints[i], true) : rows;
+    for (uint32_t k = 0; k < (options.rotate ? 4u : 1u); ++k) p.oriented[i][k] = orient(p.prints[i], rows, columns, k);
+  }
   return p;
 }
 
-struct Candidate {
-  int64_t cost = std::numeric_limits<int64_t>::max();
-  int32_t y = 0, x = 0;
-  uint32_t k = 0;
-  bool operator<(const Candidate& o) const {
-    if (cost != o.cost) return cost < o.cost;
-    if (y != o.y) return y < o.y;
-    if (x != o.x) return x < o.x;
-    return k < o.k;
-  }
+// How one attempt orders the charts and picks among the orientations' first fits. No one
+// rule packs every set of shapes best (measured on the shared assets' charts, the best
+// rule differs per asset by up to 8 points of efficiency), and a failed attempt is cheap
+// next to the bisections around it, so the packer tries these in turn.
+struct Strategy {
+  enum class Order { BoxArea, Cells, Height } order;
+  enum class Pick { ReadingOrder, LowestBottom } pick;
 };
+constexpr Strategy kStrategies[] = {
+    {Strategy::Order::BoxArea, Strategy::Pick::ReadingOrder},
+    {Strategy::Order::Cells, Strategy::Pick::ReadingOrder},
+    {Strategy::Order::Height, Strategy::Pick::LowestBottom},
+};
+
+// Bottom-left fill of every chart into width x height, biggest first, each at the first
+// free position of its best orientation; the occupied cells, dilated by the gutter, are a
+// bitmap, so holes under overhangs and between charts stay available to smaller charts.
+Packing place(const Prints& P, uint32_t width, uint32_t height, const PackOptions& options, const Strategy& strategy) {
+  Packing out;
+  const size_t n = P.prints.size();
+  out.width = width, out.height = height, out.scale = P.scale;
+  out.placements.resize(n);
+  out.chart_area = P.area;
+  out.covered = P.covered;
+  const uint32_t b = P.block;
+  const int32_t g = int32_t((options.gutter + b - 1) / b);  // gutter in cells
+  const int32_t wc = int32_t(width / b), hc = int32_t(height / b);
+  if (wc <= 0 || hc <= 0 || !(P.scale > 0)) return out;
+
+  std::vector<size_t> order(n);
+  std::iota(order.begin(), order.end(), size_t(0));
+  auto key = [&](size_t i) -> uint64_t {
+    const Footprint& f = P.prints[i];
+    switch (strategy.order) {
+      case Strategy::Order::BoxArea: return uint64_t(f.w) * f.h;
+      case Strategy::Order::Cells: return f.count;
+      default: return std::min(f.w, f.h);  // the side that stays vertical in some orientation
+    }
+  };
+  std::sort(order.begin(), order.end(), [&](size_t a, size_t c) {
+    const uint64_t ka = key(a), kc = key(c);
+    if (ka != kc) return ka > kc;
+    if (P.prints[a].count != P.prints[c].count) return P.prints[a].count > P.prints[c].count;
+    return a < c;
+  });
+
+  Blocked blocked(wc, hc);
+  std::vector<int32_t> longest(size_t(hc), 0);
+  for (int32_t y = 0; y < hc; ++y) {
+    if (y < g || y >= hc - g) {
+      blocked.set(y, 0, wc - 1);
+    } else {
+      blocked.set(y, 0, g - 1);
+      blocked.set(y, wc - g, wc - 1);
+    }
+    longest[size_t(y)] = blocked.longest_free(y);
+  }
+  const uint32_t orientations = options.rotate ? 4 : 1;
+  for (size_t i : order) {
+    const Footprint& f = P.prints[i];
+    // Each orientation's first free position in reading order; the orientation kept is the
+    // earliest in reading order or the one whose footprint ends highest (ties: fewer
+    // turns). A later orientation is searched only down to where it could still win.
+    const Oriented* best = nullptr;
+    std::array<int32_t, 2> at{-1, -1};
+    uint32_t best_k = 0;
+    for (uint32_t k = 0; k < orientations; ++k) {
+      const Oriented& o = P.oriented[i][k];
+      int32_t y_end = hc;
+      if (best) y_end = strategy.pick == Strategy::Pick::ReadingOrder ? at[1] + 1 : at[1] + best->fh - o.fh;
+      auto p = first_fit(blocked, longest, o, wc, hc, y_end);
+      if (p[1] < 0) continue;
+      const bool better = !best || (strategy.pick == Strategy::Pick::ReadingOrder
+                                        ? std::make_pair(p[1], p[0]) < std::make_pair(at[1], at[0])
+                                        : p[1] + o.fh < at[1] + best->fh);
+      if (better) at = p, best = &o, best_k = k;
+    }
+    if (!best) return out;  // does not fit
+    for (const Oriented::Run& r : best->runs)
+      for (int32_t dy = -g; dy <= g; ++dy) blocked.set(at[1] + r.row + dy, at[0] + r.a - g, at[0] + r.b + g);
+    for (int32_t y = std::max(0, at[1] - g); y < std::min(hc, at[1] + best->fh + g); ++y) longest[size_t(y)] = blocked.longest_free(y);
+    // Footprint origin in texels, and the affine placement.
+    ChartPlacement& pl = out.placements[i];
+    pl.rotation = best_k;
+    pl.x = uint32_t(at[0]) * b;
+    pl.y = uint32_t(at[1]) * b;
+    pl.width = uint32_t(best->fw) * b;
+    pl.height = uint32_t(best->fh) * b;
+    // atlas = O + R_k (s p - m) + (the turned footprint's shift back into the quadrant),
+    // with O the footprint's corner, m the scaled chart's minimum corner, and fw x fh the
+    // footprint's extent in texels before turning.
+    const double fw = double(f.w) * b, fh = double(f.h) * b;
+    switch (best_k) {
+      case 0: pl.tx = pl.x - f.min_x, pl.ty = pl.y - f.min_y; break;
+      case 1: pl.tx = pl.x + f.min_y + fh, pl.ty = pl.y - f.min_x; break;
+      case 2: pl.tx = pl.x + f.min_x + fw, pl.ty = pl.y + f.min_y + fh; break;
+      default: pl.tx = pl.x - f.min_y, pl.ty = pl.y + f.min_x + fw; break;
+    }
+  }
+  out.ok = true;
+  double footprint_cells = 0;
+  for (const Footprint& f : P.prints) footprint_cells += f.count;
+  out.gutter_texels = (double(blocked.count()) - footprint_cells) * b * b;
+  out.efficiency = out.covered / (double(width) * height);
+  return out;
+}
+
+Packing place_any(const Prints& P, uint32_t width, uint32_t height, const PackOptions& options) {
+  Packing p;
+  for (const Strategy& s : kStrategies) {
+    p = place(P, width, height, options, s);
+    if (p.ok) break;
+  }
+  return p;
+}
 
 }  // namespace
 
 Packing pack_charts(const std::vector<ChartShape>& charts, uint32_t width, uint32_t height, double scale,
                     const PackOptions& options) {
-  Packing out;
-  out.width = width, out.height = height, out.scale = scale;
-  out.placements.resize(charts.size());
-  const uint32_t b = std::max<uint32_t>(1, options.block);
-  const uint32_t g = (options.gutter + b - 1) / b;  // gutter in cells
-  const int32_t wc = int32_t(width / b), hc = int32_t(height / b);
-  if (wc <= 0 || hc <= 0 || !(scale > 0)) return out;
-
-  std::vector<Footprint> prints(charts.size());
-  for (size_t i = 0; i < charts.size(); ++i) {
-    prints[i] = rasterize(charts[i], scale, b);
-    out.chart_area += prints[i].area;
-  }
-  // Big charts first: by set cells, then by longer side, then input order.
-  std::vector<size_t> order(charts.size());
-  std::iota(order.begin(), order.end(), size_t(0));
-  std::sort(order.begin(), order.end(), [&](size_t a, size_t c) {
-    if (prints[a].count != prints[c].count) return prints[a].count > prints[c].count;
-    const uint32_t la = std::max(prints[a].w, prints[a].h), lc = std::max(prints[c].w, prints[c].h);
-    if (la != lc) return la > lc;
-    return a < c;
-  });
-
-  std::vector<int32_t> horizon(wc, 0);  // first free row per column (below every footprint)
-  int32_t top = 0;                      // rows used, gutters included
-  for (size_t i : order) {
-    const Footprint& f = prints[i];
-    Candidate best;
-    Profile profiles[2];
-    const int orientations = options.rotate ? 2 : 1;
-    for (int k = 0; k < orientations; ++k) {
-      const Profile& p = profiles[k] = profile_of(f, k == 1, g);
-      const int32_t dw = int32_t(p.dtop.size());
-      if (dw > wc || p.dh > hc) continue;
-      const int32_t nx = wc - dw + 1;
-      // Serial scan (a parallel region per chart costs more than it saves): a candidate is
-      // pruned as soon as a lower bound of its cost exceeds the best so far (exact: ties are
-      // still evaluated, and the order (cost, y, x, k) is total).
-      for (int32_t x = 0; x < nx; ++x) {
-        Candidate& lb = best;
-        const int64_t limit = lb.cost;
-        int32_t y = 0;
-        bool pruned = false;
-        for (int32_t c = 0; c < dw; ++c) {
-          if (p.dtop[c] == INT32_MAX) continue;
-          y = std::max(y, horizon[x + c] - p.dtop[c]);
-          if (y + p.dh > hc || int64_t(std::max(0, y + p.dh - top)) * wc > limit) {
-            pruned = true;
-            break;
-          }
-        }
-        if (pruned) continue;
-        int64_t cost = int64_t(std::max(0, y + p.dh - top)) * wc;
-        for (int32_t c = 0; c < dw && cost <= limit; ++c)
-          if (p.dtop[c] != INT32_MAX) cost += y + p.dtop[c] - horizon[x + c];
-        if (cost > limit) continue;
-        Candidate cand{cost, y, x, uint32_t(k)};
-        if (cand < lb) lb = cand;
-      }
-    }
-    if (best.cost == std::numeric_limits<int64_t>::max()) return out;  // does not fit
-    const Profile& p = profiles[best.k];
-    for (uint32_t j = 0; j < p.fw; ++j)
-      if (p.fbot[j] >= 0) {
-        int32_t& h = horizon[best.x + g + j];
-        h = std::max(h, best.y + int32_t(g) + p.fbot[j] + 1);
-      }
-    top = std::max(top, best.y + p.dh);
-    // Footprint origin in texels, and the affine placement.
-    ChartPlacement& pl = out.placements[i];
-    pl.rotation = best.k;
-    pl.x = (best.x + g) * b;
-    pl.y = (best.y + g) * b;
-    pl.width = p.fw * b;
-    pl.height = p.fh * b;
-    if (best.k == 0) {
-      pl.tx = pl.x - f.min_x;
-      pl.ty = pl.y - f.min_y;
-    } else {  // atlas = O + R1 (s p - m) + (b h, 0), R1 (x, y) = (-y, x)
-      pl.tx = pl.x + f.min_y + double(f.h) * b;
-      pl.ty = pl.y - f.min_x;
-    }
-  }
-  out.ok = true;
-  out.used_height = uint32_t(top) * b;
-  out.efficiency = out.chart_area / (double(width) * height);
-  return out;
+  return place_any(rasterize_all(charts, scale, options), width, height, options);
 }
 
 namespace {
@@ -335,26 +557,32 @@ constexpr uint32_t kMaxSide = 1u << 16;
 
 }  // namespace
 
-AtlasChoice choose_atlas(const std::vector<ChartShape>& charts, uint32_t old_width, uint32_t old_height,
-                         double old_used_texels, const BudgetOptions& o) {
-  AtlasChoice choice;
+namespace {
+
+// choose_atlas at one aspect ratio (width / height).
+Packing choose_at_aspect(const std::vector<ChartShape>& charts, double area1, uint32_t old_width, uint32_t old_height,
+                         double old_used_texels, const BudgetOptions& o, double aspect) {
+  Packing p;
   SizeRule rule;
-  rule.aspect = o.keep_aspect && old_width > 0 && old_height > 0 ? double(old_width) / old_height : 1.0;
+  rule.aspect = aspect;
   rule.pot = o.pot;
   rule.block = std::max<uint32_t>(1, o.pack.block);
   const double r = rule.aspect >= 1 ? rule.aspect : 1 / rule.aspect;
 
-  const double area1 = chart_area(charts);
-
+  Prints prints;  // the last scale's footprints, reused while only the atlas size changes
+  prints.scale = -1;
   auto fits_at = [&](uint32_t L, double s) {
     auto d = rule.dims(L);
-    return pack_charts(charts, d[0], d[1], s, o.pack);
+    if (prints.scale != s) prints = rasterize_all(charts, s, o.pack);
+    return place_any(prints, d[0], d[1], o.pack);
   };
   // Smallest longer side (non-pot) holding the charts at scale s; 0 if none <= kMaxSide.
-  auto smallest_side = [&](double s) -> uint32_t {
+  // known: a side known to hold them (0: none), which bounds the search from above.
+  auto smallest_side = [&](double s, uint32_t known = 0) -> uint32_t {
     uint32_t lo = std::max<uint32_t>(1, uint32_t(std::sqrt(s * s * area1 * r)));  // area bound
     if (lo > 1) --lo;
-    uint32_t hi = std::max<uint32_t>(lo + 1, 2);
+    if (known > 0 && known <= lo) return known;
+    uint32_t hi = known > 0 ? known : std::max<uint32_t>(lo + 1, 2);
     while (!fits_at(hi, s).ok) {
       lo = hi;
       if (hi >= kMaxSide) return 0;
@@ -370,7 +598,6 @@ AtlasChoice choose_atlas(const std::vector<ChartShape>& charts, uint32_t old_wid
     return hi;
   };
 
-  Packing p;
   if (o.size > 0) {
     const uint32_t L = o.pot ? rule.nearest_pot(o.size) : o.size;
     auto d = rule.dims(L);
@@ -378,7 +605,7 @@ AtlasChoice choose_atlas(const std::vector<ChartShape>& charts, uint32_t old_wid
   } else if (o.measure == CostMeasure::ChartTexels && old_used_texels > 0 && area1 > 0) {
     const double s = std::min(o.s_max, std::sqrt(o.cost * old_used_texels / area1));
     const uint32_t L = smallest_side(s);
-    if (L == 0) return choice;
+    if (L == 0) return p;
     if (o.pot) {
       auto d = rule.dims(rule.nearest_pot(L));
       p = pack_max_scale(charts, d[0], d[1], o.pack, o.s_max);
@@ -400,13 +627,51 @@ AtlasChoice choose_atlas(const std::vector<ChartShape>& charts, uint32_t old_wid
           L /= 2;
         }
       } else {
-        const uint32_t Ls = smallest_side(o.s_max);
+        const uint32_t Ls = smallest_side(o.s_max, L);
         if (Ls > 0 && Ls < L) p = fits_at(Ls, o.s_max);
       }
     }
   }
-  if (!p.ok) return choice;
-  choice.packing = std::move(p);
+  return p;
+}
+
+}  // namespace
+
+AtlasChoice choose_atlas(const std::vector<ChartShape>& charts, uint32_t old_width, uint32_t old_height,
+                         double old_used_texels, const BudgetOptions& o) {
+  AtlasChoice choice;
+  const double area1 = chart_area(charts);
+  const double source = old_width > 0 && old_height > 0 ? double(old_width) / old_height : 1.0;
+  // With the aspect free: 2:1 and 1:2 of the source's beside it, then 4:1 (1:4) where 2:1
+  // (1:2) won, so a long chart gets a long atlas without trying every shape every time.
+  auto better = [](const Packing& p, const Packing* than) {
+    // The largest scale (more texels per chart), then the fewest image texels; a shape
+    // other than the source's must win by 1 % (than is always the earlier in the list).
+    if (!p.ok) return false;
+    if (!than) return true;
+    if (p.scale > than->scale * 1.01) return true;
+    return p.scale >= than->scale * (1 - 1e-9) && double(p.width) * p.height < 0.99 * double(than->width) * than->height;
+  };
+  std::vector<double> aspects{source};
+  if (!o.keep_aspect) aspects.insert(aspects.end(), {source * 2, source / 2});
+  std::vector<Packing> found(aspects.size());
+  // Independent searches, compared in list order: the result does not depend on threads.
+#pragma omp parallel for schedule(dynamic, 1)
+  for (int k = 0; k < int(aspects.size()); ++k)
+    found[size_t(k)] = choose_at_aspect(charts, area1, old_width, old_height, old_used_texels, o, aspects[size_t(k)]);
+  if (!o.keep_aspect) {
+    const bool wide = better(found[1], &found[0]) && !better(found[2], &found[1]);
+    const bool tall = better(found[2], &found[0]) && !better(found[1], &found[2]);
+    if (wide || tall) {
+      aspects.push_back(source * (wide ? 4 : 0.25));
+      found.push_back(choose_at_aspect(charts, area1, old_width, old_height, old_used_texels, o, aspects.back()));
+    }
+  }
+  Packing* best = nullptr;
+  for (Packing& p : found)
+    if (better(p, best)) best = &p;
+  if (!best) return choice;
+  choice.packing = std::move(*best);
   const Packing& q = choice.packing;
   if (old_used_texels > 0) choice.cost_ratio = q.chart_area / old_used_texels;
   if (old_width > 0 && old_height > 0) choice.texel_ratio = double(q.width) * q.height / (double(old_width) * old_height);

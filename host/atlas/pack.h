@@ -1,13 +1,14 @@
 // Packing charts into a texture atlas, and choosing the atlas size from a pixel budget.
 //
-// Only translations and 90-degree rotations are used: any other rotation would undo the
-// orientation that the mesh stage optimized. The packer is a raster "Tetris" packer on
-// each chart's rasterized footprint (as in LSCM's packer [LPRM02], which the perceptual
-// loss paper uses): a per-column horizon of occupied texels, each chart dropped onto it at
-// the column offset and rotation (0 or 90 degrees) that adds the least area (growth of the
-// used height + holes left between the horizon and the chart's lower profile). It packs
-// actual footprints, not bounding boxes, so L-shaped and diagonal charts interlock along
-// the horizon; holes under overhangs are not refilled.
+// Only translations and quarter turns are used: any other rotation would undo the
+// orientation that the mesh stage optimized. The packer places each chart's rasterized
+// footprint, not its bounding box, so L-shaped and diagonal charts interlock. It is a
+// bottom-left fill over a bitmap of the cells already taken (dilated by the gutter): each
+// chart, biggest first, goes to the first free position in reading order of the best of its
+// four orientations, so holes under overhangs and between charts are refilled by smaller
+// charts. A few orderings and orientation rules are tried in turn until one fits (no single
+// rule packs every asset best). A position test is a few 64-bit word operations per row of
+// the footprint, and a failed test jumps the scan past the cells that blocked it.
 //
 // Coordinates: atlas texel space, x to the right, y down (image rows, as glTF v), texel
 // (i, j) covers [i, i+1) x [j, j+1). A chart's footprint is every texel whose square
@@ -42,13 +43,13 @@ struct ChartShape {
 struct PackOptions {
   uint32_t gutter = 4;  // empty texels between charts and at the image edge
   uint32_t block = 1;   // 1, or 4 for BCn block alignment
-  bool rotate = true;   // allow 90-degree rotations
+  bool rotate = true;   // allow quarter turns
 };
 
-// Where one chart goes: atlas = R_k (scale * p) + t, with R_0 = identity and
+// Where one chart goes: atlas = R_k (scale * p) + t, with R_k = R_1^k and
 // R_1 (x, y) = (-y, x) (in the y-down image a clockwise quarter turn).
 struct ChartPlacement {
-  uint32_t rotation = 0;  // k in {0, 1}
+  uint32_t rotation = 0;  // k in {0, 1, 2, 3}
   double tx = 0, ty = 0;
   // Texel cell of the footprint's bounding box corner and its size in texels (multiples of
   // the block size).
@@ -60,9 +61,10 @@ struct Packing {
   uint32_t width = 0, height = 0;  // atlas size in texels
   double scale = 1;                // uniform scale applied to every chart
   std::vector<ChartPlacement> placements;  // one per chart, in input order
-  double chart_area = 0;     // sum of |triangle areas| after scaling, texels^2
-  double efficiency = 0;     // chart_area / (width * height)
-  uint32_t used_height = 0;  // rows down to the lowest footprint texel + gutter
+  double chart_area = 0;     // sum of |triangle areas| after scaling, texels^2 (eq. 20: overlaps count twice)
+  double covered = 0;        // atlas texels whose centre a chart covers (overlapping charts count once)
+  double efficiency = 0;     // covered / (width * height): the share of the image under charts
+  double gutter_texels = 0;  // texels kept empty for gutters (around footprints and along the edge)
 
   // Chart point (input units) -> atlas texel coordinates.
   std::array<double, 2> map(size_t chart, double x, double y) const;
@@ -93,7 +95,10 @@ struct BudgetOptions {
   CostMeasure measure = CostMeasure::ChartTexels;
   uint32_t size = 0;    // --size N: the atlas's longer side is N (the budget is ignored)
   bool pot = false;     // power-of-two sides
-  bool keep_aspect = true;  // the source's aspect ratio, else square
+  // true: the source's aspect ratio. false: also 2:1 and 1:2 of it (then 4:1 or 1:4 where
+  // that direction won), keeping another shape only when it gives 1 % more scale or 1 %
+  // fewer image texels: a long chart then gets a long atlas.
+  bool keep_aspect = true;
   double s_max = 1.0;   // never above the source texel density
   PackOptions pack;
 };
@@ -116,7 +121,9 @@ struct AtlasChoice {
 //    to it (so c_r is only approximate with pot).
 //  - ImageTexels: width * height ~= cost * old_width * old_height, then the largest scale;
 //    when that scale reaches s_max the atlas shrinks to the smallest that still fits.
-// Sides are multiples of the block size. ok = false when nothing fits.
+// Sides are multiples of the block size. ok = false when nothing fits. The aspect
+// ratios (keep_aspect) are searched independently (in parallel) and compared in a fixed
+// order, so the choice does not depend on the thread count.
 AtlasChoice choose_atlas(const std::vector<ChartShape>& charts, uint32_t old_width, uint32_t old_height,
                          double old_used_texels, const BudgetOptions& options = {});
 

@@ -52,15 +52,18 @@ size_t copy_chart_texels(const Image& resized, const ChartShape& shape, const Pa
         if (tmp[size_t(y) * size_t(bw) + size_t(x)])
           for (int k = std::max(0, y - d); k <= std::min(bh - 1, y + d); ++k) mask[size_t(k) * size_t(bw) + size_t(x)] = 1;
   }
-  // Atlas texel (i, j) <- resized texel: rotation 0: (i - tx, j - ty); rotation 1 (atlas =
-  // (-y, x) + t, a quarter turn): (j - ty, tx - i - 1).
+  // Atlas texel (i, j) <- resized texel, inverting atlas = R_k p + t at texel centres:
+  // k = 0: (i - tx, j - ty); k = 1 (R (x, y) = (-y, x)): (j - ty, tx - i - 1);
+  // k = 2: (tx - i - 1, ty - j - 1); k = 3: (ty - j - 1, i - tx).
   size_t copied = 0;
   const uint32_t C = atlas.channels;
   for (int y = y0; y < y1; ++y)
     for (int x = x0; x < x1; ++x) {
       if (!mask[size_t(y - y0) * size_t(bw) + size_t(x - x0)]) continue;
-      const long sx = pl.rotation == 0 ? x - tx : y - ty;
-      const long sy = pl.rotation == 0 ? y - ty : tx - x - 1;
+      long sx = x - tx, sy = y - ty;
+      if (pl.rotation == 1) sx = y - ty, sy = tx - x - 1;
+      if (pl.rotation == 2) sx = tx - x - 1, sy = ty - y - 1;
+      if (pl.rotation == 3) sx = ty - y - 1, sy = x - tx;
       if (sx < 0 || sy < 0 || sx >= long(resized.width) || sy >= long(resized.height)) continue;
       const float* from = &resized.pixels[(size_t(sy) * resized.width + size_t(sx)) * C];
       std::copy(from, from + C, &atlas.pixels[(size_t(y) * atlas.width + size_t(x)) * C]);

@@ -366,6 +366,7 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
     atlas::BudgetOptions budget;
     budget.cost = o.max_gmsd > 0 ? 1.0 : o.cost, budget.size = o.max_gmsd > 0 ? 0 : o.size;
     budget.pot = o.power_of_two;
+    budget.keep_aspect = o.keep_aspect;
     budget.s_max = s_max;
     budget.measure = atlas::CostMeasure::ImageTexels;  // --cost is about texture memory
     budget.pack.gutter = o.gutter, budget.pack.block = o.block;
@@ -430,6 +431,7 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
       }
     }
     out.t_pack += seconds_since(t0);
+    jl["pack_seconds"] = seconds_since(t0);
 
     // Re-bake every image of the layout into the new UVs, at the driver's new density.
     t0 = Clock::now();
@@ -511,7 +513,8 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
     jl["scale"] = packing.scale;
     jl["scale_cap"] = s_max;  // the source density of the densest triangles
     jl["capped_at_source_density"] = packing.scale >= 0.999 * s_max;
-    jl["packing_efficiency"] = packing.efficiency;
+    jl["packing_efficiency"] = packing.efficiency;   // share of the image's texels under charts
+    jl["gutter_texels"] = packing.gutter_texels;      // texels kept empty around charts and at the edge
     jl["chart_cost_ratio"] = choice.cost_ratio;
     jl["flips"] = layout_flips;
     if (!P.results.empty() && o.optimize) {
@@ -785,7 +788,15 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
   if (o.guard && o.max_gmsd <= 0 && scorer) {
     auto t0 = Clock::now();
     std::vector<std::pair<int, std::array<uint32_t, 2>>> sizes;
-    for (const auto& t : chosen.textures) sizes.push_back({t["image"].get<int>(), {t["new_size"][0].get<uint32_t>(), t["new_size"][1].get<uint32_t>()}});
+    for (const auto& t : chosen.textures) {
+      // The same texels at the image's own aspect ratio: a user's resize keeps the shape
+      // even where the packer chose another one.
+      const double w0 = t["old_size"][0].get<double>(), h0 = t["old_size"][1].get<double>();
+      const double texels = t["new_size"][0].get<double>() * t["new_size"][1].get<double>();
+      const uint32_t w = std::max(1u, uint32_t(std::lround(std::sqrt(texels * w0 / h0))));
+      const uint32_t h = std::max(1u, uint32_t(std::lround(texels / w)));
+      sizes.push_back({t["image"].get<int>(), {w, h}});
+    }
     io::GltfFile resized = original;
     resize_images(resized, sizes);
     t_score += seconds_since(t0);  // the resize; score() counts itself

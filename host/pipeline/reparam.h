@@ -20,6 +20,9 @@ struct ReparamOptions {
   double cost = 0.5;       // relative pixel cost c_r of the new textures vs the old (eq. 20-21)
   uint32_t size = 0;       // instead of cost: the new size of the largest side of the driving texture
   bool power_of_two = false;
+  // The new textures keep the source's aspect ratio. Otherwise the packer may choose 2:1,
+  // 1:2 (or 4:1, 1:4) of it when that holds the charts at a larger scale (atlas/pack.h).
+  bool keep_aspect = false;
   uint32_t gutter = 4;     // texels between charts and at the image edge
   uint32_t block = 1;      // chart alignment (4 for BCn)
   bool optimize = true;    // false: keep every Jacobian (identity), only repack and re-bake

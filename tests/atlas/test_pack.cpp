@@ -2,6 +2,8 @@
 
 #include "atlas/pack.h"
 
+#include <omp.h>
+
 #include <algorithm>
 #include <cstdint>
 #include <vector>
@@ -116,7 +118,10 @@ TEST_CASE("pack: no overlap, gutters and bounds hold, efficiency reported", "[at
   CHECK(gutters_hold(label, p.width, p.height, 3));
   // Every chart got texels.
   for (size_t c = 0; c < charts.size(); ++c) CHECK(std::count(label.begin(), label.end(), int(c) + 1) > 0);
-  CHECK(p.efficiency == Approx(p.chart_area / (160.0 * 128.0)));
+  // Efficiency: texels under the charts over the image; charts that do not overlap cover
+  // about their area (texel centres, so within a few percent at these sizes).
+  CHECK(p.efficiency == Approx(p.covered / (160.0 * 128.0)));
+  CHECK(p.covered == Approx(p.chart_area).epsilon(0.05));
   INFO("scale " << p.scale << " efficiency " << p.efficiency);
   CHECK(p.efficiency > 0.3);
   CHECK(p.efficiency < 1.0);
@@ -260,4 +265,144 @@ TEST_CASE("pack: atlas size from the budget", "[atlas]") {
   REQUIRE(cb.packing.ok);
   CHECK(cb.packing.width % 4 == 0);
   CHECK(cb.packing.height % 4 == 0);
+}
+
+TEST_CASE("pack: holes inside and between charts are refilled", "[atlas]") {
+  // A 40 x 40 square ring (walls 6 wide) and a 20 x 20 square that only fits in its hole:
+  // the atlas is 52 x 52 with gutter 2, so the ring fills it and nothing fits beside it.
+  ChartShape ring;
+  ring.points = {0, 0, 40, 0, 40, 40, 0, 40, 6, 6, 34, 6, 34, 34, 6, 34};
+  ring.triangles = {0, 1, 5, 0, 5, 4, 1, 2, 6, 1, 6, 5, 2, 3, 7, 2, 7, 6, 3, 0, 4, 3, 4, 7};
+  const std::vector<ChartShape> charts = {ring, rect(100, 100, 20, 20)};
+  PackOptions opt;
+  opt.gutter = 2;
+  Packing p = atlas::pack_charts(charts, 46, 46, 1.0, opt);
+  REQUIRE(p.ok);
+  std::vector<int> label;
+  CHECK(label_atlas(charts, p, label));
+  CHECK(gutters_hold(label, 46, 46, 2));
+  // The square sits inside the ring's hole.
+  const auto& r = p.placements[0];
+  const auto& q = p.placements[1];
+  CHECK(q.x >= r.x + 6);
+  CHECK(q.y >= r.y + 6);
+  CHECK(q.x + q.width <= r.x + 34);
+  CHECK(q.y + q.height <= r.y + 34);
+  // Under an overhang: an upside-down U (a 60 x 10 bar over two 10 x 30 legs) leaves a
+  // 40 x 30 hole open at the bottom; four 16 x 12 boxes fit only there.
+  ChartShape u;
+  u.points = {0, 0, 60, 0, 60, 40, 50, 40, 50, 10, 10, 10, 10, 40, 0, 40};
+  u.triangles = {0, 1, 4, 0, 4, 5, 1, 2, 3, 1, 3, 4, 0, 5, 6, 0, 6, 7};
+  std::vector<ChartShape> under = {u};
+  for (int i = 0; i < 4; ++i) under.push_back(rect(0, 0, 16, 12));
+  PackOptions no_turn;
+  no_turn.gutter = 1;
+  no_turn.rotate = false;
+  Packing h = atlas::pack_charts(under, 62, 42, 1.0, no_turn);
+  REQUIRE(h.ok);
+  CHECK(label_atlas(under, h, label));
+  CHECK(gutters_hold(label, 62, 42, 1));
+}
+
+TEST_CASE("pack: all four quarter turns map charts where their footprints are", "[atlas]") {
+  // A right triangle with its right angle in each corner in turn fits a 2-texel-gutter
+  // 40 x 40 atlas beside a big L only in one orientation; whichever turn is chosen, the
+  // map puts every vertex inside its placement box (label_atlas checks) and the texels
+  // never overlap.
+  for (int corner = 0; corner < 4; ++corner) {
+    ChartShape t = tri(0, 0, 20, 0, 0, 20);
+    for (size_t k = 0; k < t.points.size(); k += 2) {
+      double& x = t.points[k];
+      double& y = t.points[k + 1];
+      for (int r = 0; r < corner; ++r) {
+        const double nx = -y, ny = x;
+        x = nx, y = ny;
+      }
+    }
+    const std::vector<ChartShape> charts = {ell(0, 0, 36, 36, 12), t};
+    PackOptions opt;
+    opt.gutter = 2;
+    Packing p = atlas::pack_charts(charts, 40, 40, 1.0, opt);
+    INFO("corner " << corner);
+    REQUIRE(p.ok);
+    std::vector<int> label;
+    CHECK(label_atlas(charts, p, label));
+    CHECK(gutters_hold(label, 40, 40, 2));
+  }
+}
+
+TEST_CASE("pack: overlapping charts count their texels once, gutters are counted", "[atlas]") {
+  // Two copies of one 20 x 10 rectangle in one shape (a mirrored pair sharing texels).
+  ChartShape pair = rect(0, 0, 20, 10);
+  pair.points.insert(pair.points.end(), {0, 0, 20, 0, 20, 10, 0, 10});
+  pair.triangles.insert(pair.triangles.end(), {4, 5, 6, 4, 6, 7});
+  PackOptions opt;
+  opt.gutter = 3;
+  Packing p = atlas::pack_charts({pair}, 64, 32, 1.0, opt);
+  REQUIRE(p.ok);
+  CHECK(p.chart_area == Approx(400.0));  // eq. 20 counts both
+  CHECK(p.covered == Approx(200.0));      // the image holds them once
+  CHECK(p.efficiency == Approx(200.0 / (64 * 32)));
+  // Gutter texels: those within 3 of the footprint or of the edge, not under it (brute force).
+  const auto& pl = p.placements[0];
+  double expected = 0;
+  for (int y = 0; y < 32; ++y)
+    for (int x = 0; x < 64; ++x) {
+      const bool under = x >= int(pl.x) && x < int(pl.x + pl.width) && y >= int(pl.y) && y < int(pl.y + pl.height);
+      const bool near_edge = x < 3 || y < 3 || x >= 61 || y >= 29;
+      const bool near_chart = x >= int(pl.x) - 3 && x < int(pl.x + pl.width) + 3 && y >= int(pl.y) - 3 && y < int(pl.y + pl.height) + 3;
+      expected += !under && (near_edge || near_chart);
+    }
+  CHECK(p.gutter_texels == Approx(expected));
+}
+
+TEST_CASE("pack: a long chart gets a long atlas when the aspect is free", "[atlas]") {
+  // A 480 x 24 bar and a few squares from a 512 x 512 source, at a quarter of its texels.
+  std::vector<ChartShape> charts = {rect(0, 0, 480, 24)};
+  for (int i = 0; i < 4; ++i) charts.push_back(rect(0, 0, 60, 60));
+  atlas::BudgetOptions o;
+  o.measure = atlas::CostMeasure::ImageTexels;
+  o.cost = 0.25;
+  o.keep_aspect = true;
+  auto square = atlas::choose_atlas(charts, 512, 512, 0, o);
+  REQUIRE(square.packing.ok);
+  CHECK(square.packing.width == square.packing.height);
+  o.keep_aspect = false;
+  auto free = atlas::choose_atlas(charts, 512, 512, 0, o);
+  REQUIRE(free.packing.ok);
+  INFO("square " << square.packing.width << "x" << square.packing.height << " scale " << square.packing.scale << ", free "
+                 << free.packing.width << "x" << free.packing.height << " scale " << free.packing.scale);
+  CHECK(free.packing.width > free.packing.height);  // the bar lies along the long side
+  CHECK(free.packing.scale > 1.3 * square.packing.scale);
+  CHECK(free.packing.scale == 1.0);  // at the source density: the atlas shrank to fit
+  CHECK(free.texel_ratio <= 0.25 * 1.01);  // within the budget
+  // Four squares (2 x 2 in a square atlas) keep the source's shape.
+  std::vector<ChartShape> squares(4, rect(0, 0, 60, 60));
+  auto kept = atlas::choose_atlas(squares, 512, 512, 0, o);
+  REQUIRE(kept.packing.ok);
+  CHECK(kept.packing.width == kept.packing.height);
+}
+
+TEST_CASE("pack: the same packing on any thread count", "[atlas]") {
+  const auto charts = random_charts(40, 5);
+  atlas::BudgetOptions o;
+  o.measure = atlas::CostMeasure::ImageTexels;
+  o.cost = 0.02;
+  o.keep_aspect = false;
+  const int before = omp_get_max_threads();
+  omp_set_num_threads(1);
+  const auto a = atlas::choose_atlas(charts, 1024, 1024, 0, o);
+  omp_set_num_threads(2);
+  const auto b = atlas::choose_atlas(charts, 1024, 1024, 0, o);
+  omp_set_num_threads(before);
+  REQUIRE(a.packing.ok);
+  REQUIRE(b.packing.ok);
+  CHECK(a.packing.width == b.packing.width);
+  CHECK(a.packing.height == b.packing.height);
+  CHECK(a.packing.scale == b.packing.scale);
+  for (size_t c = 0; c < charts.size(); ++c) {
+    CHECK(a.packing.placements[c].tx == b.packing.placements[c].tx);
+    CHECK(a.packing.placements[c].ty == b.packing.placements[c].ty);
+    CHECK(a.packing.placements[c].rotation == b.packing.placements[c].rotation);
+  }
 }

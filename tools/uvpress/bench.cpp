@@ -36,6 +36,7 @@ void add_bench(CLI::App& app, Globals& g) {
   add_bench_rebake(*bench, g);
   add_bench_quality(*bench, g);
   add_bench_rebake_lsq(*bench, g);
+  add_bench_pack(*bench, g);
 }
 
 }  // namespace uvpress::cli

@@ -27,5 +27,6 @@ void add_bench_eval(CLI::App& bench, Globals& g);
 void add_bench_rebake(CLI::App& bench, Globals& g);
 void add_bench_quality(CLI::App& bench, Globals& g);
 void add_bench_rebake_lsq(CLI::App& bench, Globals& g);
+void add_bench_pack(CLI::App& bench, Globals& g);
 
 }  // namespace uvpress::cli
