@@ -5,6 +5,7 @@
 #include "atlas/place_texels.h"
 #include "atlas/rebake.h"
 #include "atlas/rebake_lsq.h"
+#include "atlas/uv_overlap.h"
 #include "core/disjoint_sets.h"
 #include "core/error.h"
 #include "core/quantile.h"
@@ -14,6 +15,7 @@
 #include "io/gltf_append.h"
 #include "io/image_io.h"
 #include "perceptual/mesh_stage.h"
+#include "pipeline/injective_fit.h"
 #include "perceptual/triangle_view.h"
 
 #include <algorithm>
@@ -235,6 +237,8 @@ struct Realized {
   json textures = json::array();
   double old_texels = 0, new_texels = 0;
   size_t flips = 0, charts = 0, mesh_failed = 0;
+  size_t overlaps_new = 0;           // triangle pairs overlapping in the written UVs, not in the input's
+  size_t overlap_fallback_charts = 0;  // charts kept at their input shape because their fit overlapped
   double t_mesh = 0, t_pack = 0, t_bake = 0;
   double q = -1;                     // 20-view GMSD of the file as written (-1: not scored)
 };
@@ -275,7 +279,7 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
     const std::vector<Chart>& charts = P.charts;
     const double W = P.W, H = P.H;
     json& jl = out.layouts[li];
-    size_t layout_flips = 0, mesh_failed = 0;
+    size_t layout_flips = 0, mesh_failed = 0, overlap_fallback_pairs = 0;
 
     // Mesh stage per chart. Weights floored relative to the whole layout's mean (not only
     // the chart's): a chart of flat signal has weights near 0 everywhere and would follow
@@ -292,6 +296,7 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
       mesh_options.weight_floor = n ? 1e-3 * sum / double(n) : 0;
     }
     std::vector<std::vector<double>> new_uv_of(charts.size());
+    std::vector<std::string> overlapped;  // charts fallen back to their input shape, with their new pairs
     for (size_t c = 0; c < charts.size(); ++c) {
       const Chart& ch = charts[c];
       if (!cand.reshape || P.results[ch.uv_set].empty() || ch.rigid || ch.shared) {
@@ -301,7 +306,9 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
       std::vector<perceptual::TriangleTarget> targets;
       targets.reserve(ch.triangles.size());
       for (uint32_t t : ch.triangles) targets.push_back(target_of(P.results[ch.uv_set][t], cand.floor, cand.rotate));
-      perceptual::MeshStageResult fit = perceptual::fit_chart(ch.uv, ch.local, targets, mesh_options);
+      // A fit that runs the chart over itself is dropped for the input shape (injective_fit.h).
+      InjectiveFit injective = fit_chart_injective(ch.uv, ch.local, targets, mesh_options);
+      perceptual::MeshStageResult& fit = injective.fit;
       new_uv_of[c] = std::move(fit.uv);
       // A failed factorization leaves the chart at its input (or last accepted, flip-free)
       // shape: said in the report and as a warning, never passed off as optimized.
@@ -310,7 +317,18 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
         if (mesh_failed == 1)
           warnings.push_back(cand.name + ": layout " + std::to_string(li) + " chart " + std::to_string(c) + ": mesh stage " + fit.failure);
       }
+      if (injective.fell_back()) {
+        overlap_fallback_pairs += injective.overlap_pairs;
+        overlapped.push_back(std::to_string(c) + " (" + std::to_string(injective.overlap_pairs) + ")");
+      }
       if (progress) progress("mesh stage (" + cand.name + ", layout " + std::to_string(li) + ")", c + 1, charts.size());
+    }
+    if (!overlapped.empty()) {
+      std::string list;
+      for (const auto& c : overlapped) list += (list.empty() ? "" : ", ") + c;
+      warnings.push_back(cand.name + ": layout " + std::to_string(li) + ": " + (overlapped.size() == 1 ? "chart " : "charts ") +
+                         list + " (new overlapping triangle pairs) ran over " + (overlapped.size() == 1 ? "itself" : "themselves") +
+                         " in the mesh stage: kept at the input shape");
     }
     // No triangle may flip relative to the input.
     for (size_t c = 0; c < charts.size(); ++c) {
@@ -433,6 +451,27 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
     out.t_pack += seconds_since(t0);
     jl["pack_seconds"] = seconds_since(t0);
 
+    // The invariant, on the UVs as written: no two triangles of the layout overlap unless
+    // they did in the input. The packer keeps its units' footprints apart and a unit's
+    // charts as the input had them, so a new overlap here is a bug, never written.
+    size_t overlaps_new = 0;
+    {
+      std::vector<double> before, after;
+      std::vector<uint32_t> triangles;
+      for (size_t si = 0; si < L.uv_sets.size(); ++si) {
+        const io::Primitive& prim = asset.primitives[size_t(L.uv_sets[si].primitive)];
+        const std::vector<float>& old_uv = prim.uv_sets[size_t(L.uv_sets[si].tex_coord)].uv;
+        const uint32_t base = uint32_t(before.size() / 2);
+        before.insert(before.end(), old_uv.begin(), old_uv.end());
+        after.insert(after.end(), new_uv[si].begin(), new_uv[si].end());
+        for (size_t k = 0; k < 3 * prim.triangle_count(); ++k) triangles.push_back(base + prim.indices[k]);
+      }
+      overlaps_new = atlas::find_new_overlaps(before.data(), after.data(), triangles.data(), triangles.size() / 3).size();
+      if (overlaps_new)
+        warnings.push_back(cand.name + ": layout " + std::to_string(li) + ": " + std::to_string(overlaps_new) +
+                           " pairs of triangles overlap in the new UVs that did not in the input (layout rejected)");
+    }
+
     // Re-bake every image of the layout into the new UVs, at the driver's new density.
     t0 = Clock::now();
     std::vector<atlas::RebakeMesh> meshes;
@@ -503,6 +542,8 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
     out.flips += layout_flips;
     out.charts += charts.size();
     out.mesh_failed += mesh_failed;
+    out.overlaps_new += overlaps_new;
+    out.overlap_fallback_charts += overlapped.size();
     jl["charts"] = charts.size();
     jl["rigid_charts"] = P.rigid;
     jl["shared_texel_charts"] = P.shared_charts;  // packed with the charts they share texels with, unreshaped
@@ -517,6 +558,9 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
     jl["gutter_texels"] = packing.gutter_texels;      // texels kept empty around charts and at the edge
     jl["chart_cost_ratio"] = choice.cost_ratio;
     jl["flips"] = layout_flips;
+    jl["overlaps_new"] = overlaps_new;                      // triangle pairs; 0, or the layout is not written
+    jl["overlap_fallback_charts"] = overlapped.size();      // reshaped charts that ran over themselves: input shape
+    jl["overlap_fallback_pairs"] = overlap_fallback_pairs;  // the new overlapping pairs they would have had
     if (!P.results.empty() && o.optimize) {
       jl["mesh_stage_failed_charts"] = mesh_failed;
       if (mesh_failed > 1)
@@ -744,13 +788,19 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
   auto consider = [&](const Candidate& c) {
     io::GltfFile f = original;
     Realized r = realize(asset, layouts, prepared, layout_base, f, engine, o, c, progress, warnings);
-    if (scorer) r.q = score(f).q;
+    if (scorer && r.overlaps_new == 0) r.q = score(f).q;
     candidates.push_back({{"name", r.name},
                           {"cost_ratio", r.old_texels > 0 ? r.new_texels / r.old_texels : 1.0},
-                          {"q", r.q >= 0 ? json(r.q) : json(nullptr)}});
+                          {"q", r.q >= 0 ? json(r.q) : json(nullptr)},
+                          {"overlaps_new", r.overlaps_new}});
+    // New UV overlaps disqualify a layout whatever its score: never written.
+    if (r.overlaps_new > 0) return;
     if (!have || (r.q >= 0 && r.q < chosen.q)) chosen = std::move(r), file = std::move(f), chosen_plan = c, have = true;
   };
   for (const Candidate& c : plans) consider(c);
+  if (!prepared.empty() && !have)
+    throw InputError(file.path, "every layout built has triangles overlapping in UV that did not in the input "
+                                "(see overlaps_new); nothing written");
   // The kept layout once more with the least-squares re-bake (the texels whose bilinear
   // reconstruction is closest to the source over the surface), with the unreshaped charts'
   // texels copied and with them solved too: a copy at a fractional scale can blur edges a
@@ -867,6 +917,8 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
   report["textures"] = chosen.textures;
   report["cost_ratio"] = chosen.old_texels > 0 ? chosen.new_texels / chosen.old_texels : 1.0;
   report["flips"] = chosen_by == "resize" ? 0 : chosen.flips;
+  report["overlaps_new"] = chosen_by == "resize" ? 0 : chosen.overlaps_new;  // always 0 in a written file
+  report["overlap_fallback_charts"] = chosen_by == "resize" ? 0 : chosen.overlap_fallback_charts;
   report["charts"] = chosen.charts;
   report["triangles_optimized"] = optimized;
   report["triangles_infeasible"] = infeasible;

@@ -5,10 +5,13 @@
 // an OBJ with `vt` (the input's own UVs replaced), or a glTF with a new TEXCOORD set on
 // every primitive (existing sets untouched). UVs are scaled uniformly into [0,1] (charts
 // of a glTF laid out side by side on shelves at one common scale); the tool counts
-// flipped triangles on the values as written.
+// flipped triangles on the values as written, and for a glTF the pairs of triangles that
+// overlap in the new UVs but did not in TEXCOORD_0 (a flattened chart whose free boundary
+// runs over itself keeps its input UVs; any new overlap left fails the run).
 #include "cli.h"
 
 #include "atlas/charts.h"
+#include "atlas/uv_overlap.h"
 #include "core/error.h"
 #include "flatten/disk_topology.h"
 #include "flatten/flatten.h"
@@ -74,11 +77,16 @@ struct PrimitiveCharts {
   std::vector<std::vector<uint32_t>> vertex_of;  // per chart: local vertex -> welded UV vertex
 };
 
+// Whether the primitive has a TEXCOORD_0 to chart by (else all UVs read as 0).
+bool has_uvs(const io::Primitive& prim) {
+  return !prim.uv_sets.empty() && prim.uv_sets[0].uv.size() == 2 * prim.vertex_count();
+}
+
 PrimitiveCharts split_primitive(const io::Primitive& prim) {
   PrimitiveCharts pc;
   std::vector<float> zero_uv;
   const float* uv = nullptr;
-  if (!prim.uv_sets.empty() && prim.uv_sets[0].uv.size() == 2 * prim.vertex_count()) {
+  if (has_uvs(prim)) {
     uv = prim.uv_sets[0].uv.data();
   } else {
     zero_uv.assign(2 * prim.vertex_count(), 0.0f);
@@ -91,7 +99,7 @@ PrimitiveCharts split_primitive(const io::Primitive& prim) {
 }
 
 void flatten_gltf(const Globals& g, const std::string& input, const std::string& output, const flatten::Options& o,
-                  std::vector<Chart>& charts, std::vector<std::string>& uv_sets,
+                  std::vector<Chart>& charts, std::vector<std::string>& uv_sets, size_t& overlaps_new,
                   std::chrono::steady_clock::time_point& t0) {
   io::GltfFile file = io::load_gltf(input, g.refs());
   io::Asset asset = io::build_asset(file);
@@ -131,6 +139,16 @@ void flatten_gltf(const Globals& g, const std::string& input, const std::string&
       // dropped after the solve. A chart that still cannot be flattened (non-manifold, a
       // handle, a degenerate Tutte embedding) keeps its input UVs, scaled into its shelf,
       // with a warning naming it.
+      std::vector<double> input_uv(2 * back.size());
+      for (size_t i = 0; i < back.size(); ++i)
+        for (int d = 0; d < 2; ++d) input_uv[2 * i + size_t(d)] = pc.welded.uvs[2 * size_t(back[i]) + size_t(d)];
+      auto keep_input = [&](const std::string& why) {
+        chart.skipped = why;
+        chart.result = flatten::Result();
+        chart.result.uv = input_uv;
+        std::fprintf(stderr, "uvpress: %s: warning: %s: skipped: %s (input UVs kept)\n", input.c_str(),
+                     chart.label.c_str(), why.c_str());
+      };
       try {
         const flatten::FilledHoles filled = flatten::fill_holes(chart.mesh.positions, chart.mesh.triangles);
         Mesh closed;
@@ -139,19 +157,23 @@ void flatten_gltf(const Globals& g, const std::string& input, const std::string&
         chart.result = flatten::flatten(closed, o);
         chart.filled_holes = filled.filled_loops;
       } catch (const flatten::FlattenError& e) {
-        chart.skipped = e.what();
-        chart.result = flatten::Result();
-        chart.result.uv.resize(2 * back.size());
-        for (size_t i = 0; i < back.size(); ++i)
-          for (int d = 0; d < 2; ++d) chart.result.uv[2 * i + size_t(d)] = pc.welded.uvs[2 * size_t(back[i]) + size_t(d)];
-        std::fprintf(stderr, "uvpress: %s: warning: %s: skipped: %s (input UVs kept)\n", input.c_str(),
-                     chart.label.c_str(), e.what());
+        keep_input(e.what());
       }
       if (chart.skipped.empty()) {
         // A failed solve on a disk is a failure, not a skip: exit 1, nothing written.
         if (std::string why = flatten::invalid_reason(chart.result); !why.empty())
           throw InputError(input, chart.label + ": " + why);
         chart.result.uv.resize(2 * chart.mesh.vertex_count());  // the temporary vertices go
+        // Flip-free is not injective: a free boundary can run over itself. Such a chart
+        // keeps its input UVs when it has some (without, there is no shape to keep).
+        const auto overlaps = atlas::find_new_overlaps(input_uv.data(), chart.result.uv.data(),
+                                                       chart.mesh.triangles.data(), chart.mesh.triangle_count());
+        if (!overlaps.empty()) {
+          const std::string why = "the flattened chart runs over itself (" + std::to_string(overlaps.size()) +
+                                  " pairs of triangles overlap)";
+          if (!has_uvs(prim)) throw InputError(input, chart.label + ": " + why + " and there are no input UVs to keep");
+          keep_input(why);
+        }
       }
       placed.push_back({p, std::move(back), charts.size()});
       charts.push_back(std::move(chart));
@@ -242,6 +264,27 @@ void flatten_gltf(const Globals& g, const std::string& input, const std::string&
   size_t flips = 0;
   for (const auto& c : charts) flips += c.result.flips;
   if (flips) throw InputError(output, std::to_string(flips) + " flipped triangles in the UVs; nothing written");
+
+  // Injectivity on the values as written, over every primitive at once (they share the
+  // unit square): pairs of triangles that overlap in the new set but not in TEXCOORD_0.
+  {
+    std::vector<double> before, after;
+    std::vector<uint32_t> triangles;
+    for (size_t p = 0; p < asset.primitives.size(); ++p) {
+      const auto& prim = asset.primitives[p];
+      const auto& pc = split[p];
+      const uint32_t base = uint32_t(before.size() / 2);
+      for (size_t u = 0; u < pc.welded.uv_count(); ++u)
+        for (int d = 0; d < 2; ++d) {
+          before.push_back(pc.welded.uvs[2 * u + size_t(d)]);
+          after.push_back(double(float(welded_uv[p][2 * u + size_t(d)])));
+        }
+      for (size_t i = 0; i < prim.indices.size() / 3 * 3; ++i) triangles.push_back(base + pc.welded.uv_triangles[i]);
+    }
+    overlaps_new = atlas::find_new_overlaps(before.data(), after.data(), triangles.data(), triangles.size() / 3).size();
+    if (overlaps_new)
+      throw InputError(output, std::to_string(overlaps_new) + " pairs of triangles overlap in the new UVs; nothing written");
+  }
   io::save_gltf(file, output);
   g.stage("save", t0);
 }
@@ -323,7 +366,8 @@ void add_flatten(CLI::App& app, Globals& g) {
       flatten::reset_peak_rss();
       std::vector<Chart> charts;
       std::vector<std::string> uv_sets;  // glTF: the TEXCOORD sets written
-      if (gltf_in) flatten_gltf(g, a->input, a->output, o, charts, uv_sets, t0);
+      size_t overlaps_new = 0;           // glTF: always 0 when written
+      if (gltf_in) flatten_gltf(g, a->input, a->output, o, charts, uv_sets, overlaps_new, t0);
       else flatten_mesh(g, a->input, a->output, o, charts, t0);
 
       if (!a->log.empty()) {
@@ -394,6 +438,7 @@ void add_flatten(CLI::App& app, Globals& g) {
         report["uv_sets_written"] = uv_sets;
         report["charts_skipped"] = skipped;
         report["holes_filled"] = filled;
+        report["overlaps_new"] = overlaps_new;
       }
       // What a person reads: triangles, charts, time, flips, what was skipped and the UV
       // set written. The solver's own figures (eta, E_c) are in --report and -v.
