@@ -1,0 +1,94 @@
+#include "atlas/rebake_lanczos.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace uvpress::atlas {
+
+namespace {
+
+double lanczos3(double x) {
+  x = std::abs(x);
+  if (x < 1e-9) return 1;
+  if (x >= 3) return 0;
+  const double px = M_PI * x;
+  return 3 * std::sin(px) * std::sin(px / 3) / (px * px);
+}
+
+// Texel index under the sampler's wrap mode.
+int wrap(int i, int n, int mode) {
+  if (mode == kWrapClampToEdge) return std::clamp(i, 0, n - 1);
+  if (mode == kWrapMirroredRepeat) {
+    const int p = ((i % (2 * n)) + 2 * n) % (2 * n);
+    return p < n ? p : 2 * n - 1 - p;
+  }
+  return ((i % n) + n) % n;
+}
+
+}  // namespace
+
+Image rebake_lanczos(const Image& source, const std::vector<RebakeMesh>& meshes, const RebakeOptions& options,
+                     const Image& area) {
+  if (options.role == RebakeRole::Normal) return area;
+  RebakeOptions stored = options;
+  stored.role = RebakeRole::Data;  // the plan's geometry only: values are read as stored
+  const RebakePlan plan = plan_rebake(source, meshes, stored);
+  const int W = plan.width, H = plan.height, C = int(source.channels);
+  const int SW = int(source.width), SH = int(source.height);
+  Image out = area;
+  std::vector<uint8_t> covered(size_t(W) * H, 0);
+#pragma omp parallel for schedule(dynamic, 4)
+  for (int y = 0; y < H; ++y)
+    for (int x = 0; x < W; ++x) {
+      const uint32_t own = plan.owner[size_t(y) * W + x];
+      if (own == engine::kRebakeNoOwner) continue;
+      const engine::RebakeTriangle& t = plan.triangles[plan.tile_list[own]];
+      covered[size_t(y) * W + x] = 1;
+      // The texel centre's preimage, and the kernel's frame: M = V min(S^-1, 1) U^T.
+      const double cx = x + 0.5 - t.n[0][0], cy = y + 0.5 - t.n[0][1];
+      const double ox = t.o0[0] + t.J[0][0] * cx + t.J[0][1] * cy;
+      const double oy = t.o0[1] + t.J[1][0] * cx + t.J[1][1] * cy;
+      // SVD of the 2x2 J through its polar-like decomposition: J^T J = V S^2 V^T.
+      const double a = t.J[0][0], b = t.J[0][1], c = t.J[1][0], d = t.J[1][1];
+      const double p = a * a + c * c, q = a * b + c * d, r = b * b + d * d;
+      const double mean = 0.5 * (p + r), dev = std::sqrt(std::max(0.0, 0.25 * (p - r) * (p - r) + q * q));
+      const double s1 = std::sqrt(mean + dev), s2 = std::sqrt(std::max(0.0, mean - dev));
+      const double theta = 0.5 * std::atan2(2 * q, p - r);  // V's first column angle
+      const double v1[2] = {std::cos(theta), std::sin(theta)}, v2[2] = {-v1[1], v1[0]};
+      double M[2][2] = {{0, 0}, {0, 0}};
+      bool ok = s2 > 1e-12;
+      if (ok) {
+        // U columns: J v / s; M = sum_k v_k min(1/s_k, 1) u_k^T.
+        const double sk[2] = {s1, s2};
+        const double* vk[2] = {v1, v2};
+        for (int k = 0; k < 2; ++k) {
+          const double u[2] = {(a * vk[k][0] + b * vk[k][1]) / sk[k], (c * vk[k][0] + d * vk[k][1]) / sk[k]};
+          const double f = std::min(1.0 / sk[k], 1.0);
+          for (int i = 0; i < 2; ++i)
+            for (int j = 0; j < 2; ++j) M[i][j] += vk[k][i] * f * u[j];
+        }
+      }
+      if (!ok) continue;  // a degenerate map: the area bake's value stays
+      const double radius = 3 * std::max(s1, 1.0) + 1;
+      const int x0 = int(std::floor(ox - radius)), x1 = int(std::ceil(ox + radius));
+      const int y0 = int(std::floor(oy - radius)), y1 = int(std::ceil(oy + radius));
+      double acc[4] = {0, 0, 0, 0}, wsum = 0;
+      for (int sy = y0; sy <= y1; ++sy)
+        for (int sx = x0; sx <= x1; ++sx) {
+          const double dx = sx + 0.5 - ox, dy = sy + 0.5 - oy;
+          const double kx = M[0][0] * dx + M[0][1] * dy, ky = M[1][0] * dx + M[1][1] * dy;
+          if (std::abs(kx) >= 3 || std::abs(ky) >= 3) continue;
+          const double w = lanczos3(kx) * lanczos3(ky);
+          const float* s = &source.pixels[(size_t(wrap(sy, SH, options.wrap_t)) * SW + size_t(wrap(sx, SW, options.wrap_s))) * C];
+          for (int ch = 0; ch < C; ++ch) acc[ch] += w * s[ch];
+          wsum += w;
+        }
+      if (!(wsum > 1e-6)) continue;
+      float* o = &out.pixels[(size_t(y) * W + x) * C];
+      for (int ch = 0; ch < C; ++ch) o[ch] = float(std::clamp(acc[ch] / wsum, 0.0, 1.0));
+    }
+  if (options.fill_gutter) fill_gutter(out, covered);
+  return out;
+}
+
+}  // namespace uvpress::atlas
