@@ -1,11 +1,18 @@
 #include "atlas/rebake_lanczos.h"
 
+#include "core/disjoint_sets.h"
+
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <map>
 
 namespace uvpress::atlas {
 
 namespace {
+
+// Beyond this shrink in some direction a texel keeps the area bake (rebake_lanczos.h).
+constexpr double kMaxShrink = 3;
 
 double lanczos3(double x) {
   x = std::abs(x);
@@ -25,6 +32,64 @@ int wrap(int i, int n, int mode) {
   return ((i % n) + n) % n;
 }
 
+// Which chart each source texel belongs to: the plan's triangles mapped back to the source
+// (old corners o0 + J (n_k - n0)), grouped into charts by shared old corners, and every
+// source texel centre inside one of them labelled with its chart (kShared where charts of
+// the input overlap, kNone in the source's gutters).
+constexpr int32_t kNone = -1, kShared = -2;
+
+struct SourceCharts {
+  std::vector<int32_t> chart_of_triangle;
+  std::vector<int32_t> texel;  // source width * height
+};
+
+SourceCharts source_charts(const RebakePlan& plan, int SW, int SH) {
+  SourceCharts sc;
+  const size_t n = plan.triangles.size();
+  std::vector<std::array<double, 6>> old(n);
+  for (size_t i = 0; i < n; ++i) {
+    const engine::RebakeTriangle& t = plan.triangles[i];
+    for (int k = 0; k < 3; ++k) {
+      const double dx = t.n[k][0] - t.n[0][0], dy = t.n[k][1] - t.n[0][1];
+      old[i][2 * size_t(k)] = t.o0[0] + t.J[0][0] * dx + t.J[0][1] * dy;
+      old[i][2 * size_t(k) + 1] = t.o0[1] + t.J[1][0] * dx + t.J[1][1] * dy;
+    }
+  }
+  DisjointSets sets(n);
+  std::map<std::pair<int64_t, int64_t>, uint32_t> corner;  // old corner (1/1024 texel) -> first triangle
+  for (size_t i = 0; i < n; ++i)
+    for (int k = 0; k < 3; ++k) {
+      const std::pair<int64_t, int64_t> key{std::llround(old[i][2 * size_t(k)] * 1024), std::llround(old[i][2 * size_t(k) + 1] * 1024)};
+      auto [it, fresh] = corner.emplace(key, uint32_t(i));
+      if (!fresh) sets.unite(it->second, uint32_t(i));
+    }
+  sc.chart_of_triangle.resize(n);
+  for (size_t i = 0; i < n; ++i) sc.chart_of_triangle[i] = int32_t(sets.find(uint32_t(i)));
+  sc.texel.assign(size_t(SW) * SH, kNone);
+  for (size_t i = 0; i < n; ++i) {
+    const double* a = &old[i][0];
+    const double* b = &old[i][2];
+    const double* c = &old[i][4];
+    const double area = (b[0] - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (b[1] - a[1]);
+    if (area == 0) continue;
+    const int x0 = std::max(0, int(std::floor(std::min({a[0], b[0], c[0]})))), x1 = std::min(SW - 1, int(std::ceil(std::max({a[0], b[0], c[0]}))));
+    const int y0 = std::max(0, int(std::floor(std::min({a[1], b[1], c[1]})))), y1 = std::min(SH - 1, int(std::ceil(std::max({a[1], b[1], c[1]}))));
+    for (int y = y0; y <= y1; ++y)
+      for (int x = x0; x <= x1; ++x) {
+        const double px = x + 0.5, py = y + 0.5;
+        const double w0 = (b[0] - px) * (c[1] - py) - (c[0] - px) * (b[1] - py);
+        const double w1 = (c[0] - px) * (a[1] - py) - (a[0] - px) * (c[1] - py);
+        const double w2 = (a[0] - px) * (b[1] - py) - (b[0] - px) * (a[1] - py);
+        const bool inside = area > 0 ? (w0 >= 0 && w1 >= 0 && w2 >= 0) : (w0 <= 0 && w1 <= 0 && w2 <= 0);
+        if (!inside) continue;
+        int32_t& l = sc.texel[size_t(y) * SW + x];
+        if (l == kNone) l = sc.chart_of_triangle[i];
+        else if (l != sc.chart_of_triangle[i]) l = kShared;
+      }
+  }
+  return sc;
+}
+
 }  // namespace
 
 Image rebake_lanczos(const Image& source, const std::vector<RebakeMesh>& meshes, const RebakeOptions& options,
@@ -37,12 +102,14 @@ Image rebake_lanczos(const Image& source, const std::vector<RebakeMesh>& meshes,
   const int SW = int(source.width), SH = int(source.height);
   Image out = area;
   std::vector<uint8_t> covered(size_t(W) * H, 0);
+  const SourceCharts charts = source_charts(plan, SW, SH);
 #pragma omp parallel for schedule(dynamic, 4)
   for (int y = 0; y < H; ++y)
     for (int x = 0; x < W; ++x) {
       const uint32_t own = plan.owner[size_t(y) * W + x];
       if (own == engine::kRebakeNoOwner) continue;
       const engine::RebakeTriangle& t = plan.triangles[plan.tile_list[own]];
+      const int32_t chart = charts.chart_of_triangle[plan.tile_list[own]];
       covered[size_t(y) * W + x] = 1;
       // The texel centre's preimage, and the kernel's frame: M = V min(S^-1, 1) U^T.
       const double cx = x + 0.5 - t.n[0][0], cy = y + 0.5 - t.n[0][1];
@@ -69,6 +136,7 @@ Image rebake_lanczos(const Image& source, const std::vector<RebakeMesh>& meshes,
         }
       }
       if (!ok) continue;  // a degenerate map: the area bake's value stays
+      if (s1 > kMaxShrink) continue;  // squeezed hard: the area bake's value stays (see the header)
       const double radius = 3 * std::max(s1, 1.0) + 1;
       const int x0 = int(std::floor(ox - radius)), x1 = int(std::ceil(ox + radius));
       const int y0 = int(std::floor(oy - radius)), y1 = int(std::ceil(oy + radius));
@@ -78,8 +146,11 @@ Image rebake_lanczos(const Image& source, const std::vector<RebakeMesh>& meshes,
           const double dx = sx + 0.5 - ox, dy = sy + 0.5 - oy;
           const double kx = M[0][0] * dx + M[0][1] * dy, ky = M[1][0] * dx + M[1][1] * dy;
           if (std::abs(kx) >= 3 || std::abs(ky) >= 3) continue;
+          const size_t at = size_t(wrap(sy, SH, options.wrap_t)) * SW + size_t(wrap(sx, SW, options.wrap_s));
+          const int32_t label = charts.texel[at];
+          if (label != kNone && label != kShared && label != chart) continue;  // another chart's texel
           const double w = lanczos3(kx) * lanczos3(ky);
-          const float* s = &source.pixels[(size_t(wrap(sy, SH, options.wrap_t)) * SW + size_t(wrap(sx, SW, options.wrap_s))) * C];
+          const float* s = &source.pixels[at * C];
           for (int ch = 0; ch < C; ++ch) acc[ch] += w * s[ch];
           wsum += w;
         }
