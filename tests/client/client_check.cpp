@@ -12,12 +12,17 @@
 #include <sstream>
 #include <stdexcept>
 #include <sys/wait.h>
+#include <unistd.h>
 
 namespace uvpress::test::client {
 
 namespace {
 
-const fs::path kChromium = "/usr/bin/chromium";
+// Debian's chromium, or UVPRESS_CHROMIUM (another build; a missing path shows the skip).
+fs::path chromium_path() {
+  const char* env = std::getenv("UVPRESS_CHROMIUM");
+  return env && *env ? fs::path(env) : fs::path("/usr/bin/chromium");
+}
 
 fs::path source_dir() { return fs::path(UVPRESS_SOURCE_DIR); }
 
@@ -59,7 +64,7 @@ int run_chromium(const std::string& url, const fs::path& work, const fs::path& d
                  int virtual_ms) {
   const fs::path profile = work / "chromium-profile";
   fs::create_directories(profile);
-  const std::string cmd = "timeout -k 5 " + std::to_string(timeout_s) + " " + kChromium.string() +
+  const std::string cmd = "timeout -k 5 " + std::to_string(timeout_s) + " " + quote(chromium_path().string()) +
                           " --headless=new --no-sandbox --use-angle=swiftshader --enable-unsafe-swiftshader"
                           " --allow-file-access-from-files --no-first-run --disable-background-networking"
                           " --disable-component-update --disable-sync --disable-quic --disable-extensions"
@@ -122,7 +127,7 @@ std::optional<std::string> chromium_unavailable() {
   static std::optional<std::optional<std::string>> cached;
   if (cached) return *cached;
   auto decide = [&]() -> std::optional<std::string> {
-    if (!fs::exists(kChromium)) return kChromium.string() + " is absent (tools/install-deps.sh installs chromium)";
+    if (!fs::exists(chromium_path())) return chromium_path().string() + " is absent (tools/install-deps.sh installs chromium)";
     const fs::path work = fs::temp_directory_path() / ("uvpress-client-probe-" + std::to_string(::getpid()));
     fs::create_directories(work);
     // A page that says whether WebGL 2 gets a context.
