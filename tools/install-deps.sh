@@ -45,7 +45,10 @@ fi
 # real-client check, tests/client). Reinstalled when either is missing or three's version is
 # not the pinned one.
 three_pinned="$(sed -n 's/.*"three": *"\([^"]*\)".*/\1/p' "$here/package.json")"
-three_have="$(sed -n 's/^ *"version": *"\([^"]*\)".*/\1/p' "$here/node_modules/three/package.json" 2>/dev/null | head -1)"
+three_have=""
+if [ -f "$here/node_modules/three/package.json" ]; then
+  three_have="$(sed -n 's/^ *"version": *"\([^"]*\)".*/\1/p' "$here/node_modules/three/package.json" | head -1)"
+fi
 if [ ! -f "$here/node_modules/gltf-validator/package.json" ] || [ "$three_have" != "$three_pinned" ]; then
   echo "install-deps: installing gltf-validator and three from npm into tools/node_modules" >&2
   (cd "$here" && npm install --no-audit --no-fund --silent >/dev/null)
