@@ -3,8 +3,9 @@
 # Debian packages through apt-get (gnuplot-nox draws eval's plot; chromium lets the eval
 # HTML test load the report headless; slurmctld, slurmd and munge run the batch test's
 # one-node cluster on loopback; clang and libclang-rt-14-dev build the libFuzzer targets),
-# and the Khronos glTF validator from npm into
-# tools/node_modules (project-local, never global). Idempotent: when everything is
+# and, from npm into tools/node_modules (project-local, never global, exact versions in
+# tools/package.json): the Khronos glTF validator and three.js (tests/client renders inputs
+# and outputs with its GLTFLoader in headless Chromium). Idempotent: when everything is
 # present it only checks and returns.
 set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
@@ -40,9 +41,16 @@ if [ ${#missing[@]} -gt 0 ]; then
   $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
 fi
 
-# Khronos glTF validator (a library; tools/validate-gltf.mjs drives it).
-if [ ! -f "$here/node_modules/gltf-validator/package.json" ]; then
-  echo "install-deps: installing gltf-validator from npm into tools/node_modules" >&2
+# Khronos glTF validator (a library; tools/validate-gltf.mjs drives it) and three.js (the
+# real-client check, tests/client). Reinstalled when either is missing or three's version is
+# not the pinned one.
+three_pinned="$(sed -n 's/.*"three": *"\([^"]*\)".*/\1/p' "$here/package.json")"
+three_have=""
+if [ -f "$here/node_modules/three/package.json" ]; then
+  three_have="$(sed -n 's/^ *"version": *"\([^"]*\)".*/\1/p' "$here/node_modules/three/package.json" | head -1)"
+fi
+if [ ! -f "$here/node_modules/gltf-validator/package.json" ] || [ "$three_have" != "$three_pinned" ]; then
+  echo "install-deps: installing gltf-validator and three from npm into tools/node_modules" >&2
   (cd "$here" && npm install --no-audit --no-fund --silent >/dev/null)
 fi
 echo "install-deps: ok" >&2
