@@ -2,6 +2,7 @@
 #include "bench.h"
 
 #include <cstdio>
+#include <filesystem>
 
 namespace uvpress::cli {
 
@@ -23,6 +24,19 @@ std::vector<Backend> available_backends(const Globals& g) {
     }
   }
   return out;
+}
+
+std::vector<std::pair<std::string, std::string>> bench_assets(const std::string& shared, bool only_given,
+                                                              const std::vector<std::string>& extra) {
+  std::vector<std::pair<std::string, std::string>> inputs;
+  if (!only_given) {
+    inputs.push_back({"demo", ""});
+    for (const char* rel : {"Duck/glTF/Duck.gltf", "Fox/glTF/Fox.gltf", "CesiumMilkTruck/glTF/CesiumMilkTruck.gltf",
+                            "MultiUVTest/glTF/MultiUVTest.gltf"})
+      inputs.push_back({std::filesystem::path(rel).stem().string(), shared + "/" + rel});
+  }
+  for (const auto& p : extra) inputs.push_back({std::filesystem::path(p).stem().string(), p});
+  return inputs;
 }
 
 void add_bench(CLI::App& app, Globals& g) {

@@ -5,6 +5,7 @@
 #include "cli.h"
 
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace uvpress::cli {
@@ -17,6 +18,12 @@ struct Backend {
 // Every backend this machine has (the native CPU one, then each Vulkan kind present), or
 // only the one --device names when it names one.
 std::vector<Backend> available_backends(const Globals& g);
+
+// The assets the quality benchmarks measure: (name, path; "" = the embedded demo asset):
+// the demo and the shared Duck, Fox, CesiumMilkTruck and MultiUVTest under `shared`
+// (unless only_given), then each of `extra`.
+std::vector<std::pair<std::string, std::string>> bench_assets(const std::string& shared, bool only_given,
+                                                              const std::vector<std::string>& extra);
 
 // One file per benchmark; each adds its subcommand under `bench`.
 void add_bench_luminance(CLI::App& bench, Globals& g);

@@ -39,14 +39,7 @@ void add_bench_pack(CLI::App& bench, Globals& g) {
   cmd->add_flag("--pot", a->reparam.power_of_two, "Power-of-two sizes");
   cmd->callback([&g, a] {
     g.action = [&g, a] {
-      std::vector<std::pair<std::string, std::string>> inputs;  // name, path ("" = the demo)
-      if (!a->only_given) {
-        inputs.push_back({"demo", ""});
-        for (const char* rel : {"Duck/glTF/Duck.gltf", "Fox/glTF/Fox.gltf", "CesiumMilkTruck/glTF/CesiumMilkTruck.gltf",
-                                "MultiUVTest/glTF/MultiUVTest.gltf"})
-          inputs.push_back({std::filesystem::path(rel).stem().string(), a->shared + "/" + rel});
-      }
-      for (const auto& p : a->assets) inputs.push_back({std::filesystem::path(p).stem().string(), p});
+      const auto inputs = bench_assets(a->shared, a->only_given, a->assets);  // name, path ("" = the demo)
       auto engine = g.make_engine();
       for (const auto& [name, path] : inputs) {
         if (!path.empty() && !std::filesystem::exists(path)) {
