@@ -231,7 +231,7 @@ Scored score_own(engine::Engine& engine, const Setup& s, const LayoutMesh& own, 
   const double texels = double(own.full.width) * own.full.height;
   r.c_r = texels / s.image_texels;
   r.c_r_chart = texels * own.uv_area / s.chart_texels;
-  r.q = score_views(engine, own, own.full, s.cameras, res, s.ref_views, timing);
+  r.q = score_views(engine, own, own.full, s.cameras, res, s.ref_views, timing, &r.q_views);
   return r;
 }
 
@@ -514,7 +514,7 @@ nlohmann::ordered_json evaluate(const io::GltfFile& reference, const std::vector
     }
     if (e.scored_as_written)
       L["as_written"] = {{"c_r", e.as_written.c_r}, {"c_r_chart", e.as_written.c_r_chart}, {"q", e.as_written.q},
-                         {"width", e.written_size[0]}, {"height", e.written_size[1]}};
+                         {"width", e.written_size[0]}, {"height", e.written_size[1]}, {"q_views", e.as_written.q_views}};
     L["curve"] = std::move(curve.points);
     curves.push_back(std::move(curve.cq));
     if (artifacts && o.artifacts) {

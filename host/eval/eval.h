@@ -110,6 +110,7 @@ nlohmann::ordered_json evaluate(const io::GltfFile& reference, const std::vector
 struct Scored {
   double c_r = 0, q = 0;
   double c_r_chart = 0;
+  std::vector<float> q_views;  // GMSD per view (q is their mean)
 };
 Scored score_as_written(const io::GltfFile& reference, const io::GltfFile& candidate, engine::Engine& engine,
                         const EvalOptions& options = {});
