@@ -61,21 +61,32 @@ struct Footprint {
   uint64_t covered = 0;        // texels whose centre some triangle covers (overlaps once)
 };
 
+// The x-extent of triangle v cut to the band y0 <= y <= y1 (y0 == y1: a line): its
+// vertices inside the band and its edges' crossings of the band's two lines. False when
+// the triangle misses the band.
+bool x_extent(const double v[3][2], double y0, double y1, double& xl, double& xr) {
+  xl = std::numeric_limits<double>::infinity(), xr = -xl;
+  for (int k = 0; k < 3; ++k) {
+    const double* p = v[k];
+    const double* q = v[(k + 1) % 3];
+    if (p[1] >= y0 && p[1] <= y1) xl = std::min(xl, p[0]), xr = std::max(xr, p[0]);
+    for (const double line : {y0, y1})
+      if ((p[1] - line) * (q[1] - line) < 0) {
+        const double x = p[0] + (q[0] - p[0]) * (line - p[1]) / (q[1] - p[1]);
+        xl = std::min(xl, x), xr = std::max(xr, x);
+      }
+  }
+  return xl <= xr;
+}
+
 // Texel centres (x + 1/2, y + 1/2) inside triangle v (texel units), marked in `mask`
 // (width x height texels): per texel row, the centres between the two edge crossings.
 void mark_centres(const double v[3][2], uint32_t width, uint32_t height, std::vector<uint8_t>& mask) {
   const double lo = std::min({v[0][1], v[1][1], v[2][1]}), hi = std::max({v[0][1], v[1][1], v[2][1]});
   const int j0 = std::max(0, int(std::ceil(lo - 0.5))), j1 = std::min(int(height) - 1, int(std::floor(hi - 0.5)));
   for (int j = j0; j <= j1; ++j) {
-    const double yc = j + 0.5;
-    double xl = std::numeric_limits<double>::infinity(), xr = -xl;
-    for (int k = 0; k < 3; ++k) {
-      const double* p = v[k];
-      const double* q = v[(k + 1) % 3];
-      if ((p[1] - yc) * (q[1] - yc) > 0 || p[1] == q[1]) continue;
-      const double x = p[0] + (q[0] - p[0]) * (yc - p[1]) / (q[1] - p[1]);
-      xl = std::min(xl, x), xr = std::max(xr, x);
-    }
+    double xl, xr;
+    if (!x_extent(v, j + 0.5, j + 0.5, xl, xr)) continue;
     const int i0 = std::max(0, int(std::ceil(xl - 0.5))), i1 = std::min(int(width) - 1, int(std::floor(xr - 0.5)));
     for (int i = i0; i <= i1; ++i) mask[size_t(j) * width + size_t(i)] = 1;
   }
@@ -130,20 +141,8 @@ Footprint rasterize(const ChartShape& chart, double scale, uint32_t block) {
     // Per row, the cells a triangle overlaps are one run (the triangle cut to the row's slab
     // is convex): the exact test finds its two ends, the cells between are filled.
     for (int y = y0; y <= y1; ++y) {
-      // The triangle's x-extent within the slab [y, y + 1]: vertices inside it and the
-      // edges' crossings of its two lines; the exact test then settles the end cells.
-      double sl = std::numeric_limits<double>::infinity(), sr = -sl;
-      for (int k = 0; k < 3; ++k) {
-        const double* p = v[k];
-        const double* q = v[(k + 1) % 3];
-        if (p[1] >= y && p[1] <= y + 1) sl = std::min(sl, p[0]), sr = std::max(sr, p[0]);
-        for (const double line : {double(y), double(y + 1)})
-          if ((p[1] - line) * (q[1] - line) < 0) {
-            const double x = p[0] + (q[0] - p[0]) * (line - p[1]) / (q[1] - p[1]);
-            sl = std::min(sl, x), sr = std::max(sr, x);
-          }
-      }
-      if (!(sl <= sr)) continue;
+      double sl, sr;  // the extent in the row's slab; the exact test then settles the end cells
+      if (!x_extent(v, y, y + 1, sl, sr)) continue;
       int a = std::max(x0, int(std::floor(sl)) - 1), e = std::min(x1, int(std::ceil(sr)));
       while (a <= e && !triangle_overlaps_box(v[0], v[1], v[2], a, y, a + 1, y + 1)) ++a;
       while (e > a && !triangle_overlaps_box(v[0], v[1], v[2], e, y, e + 1, y + 1)) --e;

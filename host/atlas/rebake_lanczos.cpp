@@ -22,16 +22,6 @@ double lanczos3(double x) {
   return 3 * std::sin(px) * std::sin(px / 3) / (px * px);
 }
 
-// Texel index under the sampler's wrap mode.
-int wrap(int i, int n, int mode) {
-  if (mode == kWrapClampToEdge) return std::clamp(i, 0, n - 1);
-  if (mode == kWrapMirroredRepeat) {
-    const int p = ((i % (2 * n)) + 2 * n) % (2 * n);
-    return p < n ? p : 2 * n - 1 - p;
-  }
-  return ((i % n) + n) % n;
-}
-
 // Which chart each source texel belongs to: the plan's triangles mapped back to the source
 // (old corners o0 + J (n_k - n0)), grouped into charts by shared old corners, and every
 // source texel centre inside one of them labelled with its chart (kShared where charts of
@@ -146,7 +136,7 @@ Image rebake_lanczos(const Image& source, const std::vector<RebakeMesh>& meshes,
           const double dx = sx + 0.5 - ox, dy = sy + 0.5 - oy;
           const double kx = M[0][0] * dx + M[0][1] * dy, ky = M[1][0] * dx + M[1][1] * dy;
           if (std::abs(kx) >= 3 || std::abs(ky) >= 3) continue;
-          const size_t at = size_t(wrap(sy, SH, options.wrap_t)) * SW + size_t(wrap(sx, SW, options.wrap_s));
+          const size_t at = size_t(engine::rebake_wrap(sy, SH, options.wrap_t)) * SW + size_t(engine::rebake_wrap(sx, SW, options.wrap_s));
           const int32_t label = charts.texel[at];
           if (label != kNone && label != kShared && label != chart) continue;  // another chart's texel
           const double w = lanczos3(kx) * lanczos3(ky);

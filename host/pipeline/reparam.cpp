@@ -229,7 +229,7 @@ struct Candidate {
   double floor = 0;
   // How reshaped charts are re-baked: Lanczos-3 through each triangle's map (atlas/
   // rebake_lanczos.h: as sharp as the resize it competes with; on the demo at half the
-  // texels q 0.022 where the area filter gives 0.031), or by least squares (rebake_lsq.h).
+  // texels q 0.022 where the area filter gives 0.030), or by least squares (rebake_lsq.h).
   enum class Bake { Lanczos, LeastSquares } bake = Bake::Lanczos;
   bool rotate = true;          // follow the triangle stage's rotations (false: R-bar = I, stretches only)
   bool exact = true;           // unreshaped charts keep their texels (atlas/place_texels.h), else resampled
