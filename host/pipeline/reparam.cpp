@@ -518,8 +518,13 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
           ro.role = atlas::RebakeRole::Data;
         ro.wrap_s = use.wrap_s, ro.wrap_t = use.wrap_t;
       }
+      // Images whose every unit's texels are copied below (atlas/place_texels.h) need only
+      // the area bake, for the gutters: a sharper bake there would be overwritten.
+      const bool copies = Rw > 0 && source.width == P.driver.width && source.height == P.driver.height &&
+                          ro.role != atlas::RebakeRole::Normal;
+      const bool all_copied = copies && std::find(unit_exact.begin(), unit_exact.end(), 0) == unit_exact.end();
       Image baked = atlas::rebake(source, meshes, ro, nullptr, &engine);
-      if (cand.bake == Candidate::Bake::Lanczos) baked = atlas::rebake_lanczos(source, meshes, ro, baked);
+      if (cand.bake == Candidate::Bake::Lanczos && !all_copied) baked = atlas::rebake_lanczos(source, meshes, ro, baked);
       if (cand.bake == Candidate::Bake::LeastSquares && ro.role != atlas::RebakeRole::Normal) {
         atlas::LsqBakeStats lsq;
         baked = atlas::rebake_least_squares(source, meshes, ro, baked, &lsq);
@@ -530,7 +535,7 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
       // size (others are not on that grid) and not for normal maps (a quarter turn must
       // rotate their vectors: the re-bake does that).
       size_t copied = 0;
-      if (Rw > 0 && source.width == P.driver.width && source.height == P.driver.height && ro.role != atlas::RebakeRole::Normal) {
+      if (copies) {
         const Image resized = Rw == source.width && Rh == source.height ? source : eval::resize_lanczos3(source, Rw, Rh, false);
         const uint32_t dilation = std::min(1u, o.gutter / 2);
         for (size_t u = 0; u < P.units.size(); ++u)
