@@ -106,11 +106,16 @@ struct ImagePairs {
 // kernel, pixel values agree to fp32 rounding. Rules: pixel (i, j) has its centre at
 // (i + 0.5, j + 0.5), x right, y down; integer edge functions with 4 sub-pixel bits and a
 // top-left rule; both faces drawn (no culling); depth = 1/w, larger is nearer, ties keep
-// the lower triangle index; perspective-correct UVs; the texture is sampled bilinearly by
-// hand in fp32 (no mip-maps: see host/eval/eval.h for why that is the right filter here),
-// clamp-to-edge or repeat; empty pixels are 0 in every channel.
+// the lower triangle index; perspective-correct UVs; the texture is sampled by hand in
+// fp32, clamp-to-edge or repeat: bilinearly from level 0 when it has one level, else
+// trilinearly as OpenGL samples a mip-mapped texture (4.6 §8.14: level of detail
+// lambda = log2 rho, rho the longer of the two screen-axis derivatives of the texel
+// coordinates, taken analytically from the attribute planes; lambda <= 0 magnifies from
+// level 0; else the two nearest levels, bilinear each, blended by frac(lambda)); empty
+// pixels are 0 in every channel. Triangles reaching past the guard band are clipped to it.
+constexpr uint32_t kMeshRenderMaxSide = 1024;  // larger views: render tiles (eval does)
 struct MeshRenderDesc {
-  uint32_t width = 512, height = 512;  // pixels, 8..1024 each
+  uint32_t width = 512, height = 512;  // pixels, 8..kMeshRenderMaxSide each
   // One camera per view: clip = M (x, y, z, 1), row-major 4x4 (OpenGL conventions: NDC x
   // right, y up; w > 0 in front of the camera).
   std::vector<std::array<float, 16>> cameras;
@@ -121,8 +126,17 @@ struct MeshRenderDesc {
   const float* uvs = nullptr;  // u v per vertex, glTF convention (v down the image)
   const float* texture = nullptr;  // texture_height rows of texture_width texels, `channels` floats each, row 0 on top
   uint32_t texture_width = 0, texture_height = 0, channels = 1;  // channels 1..4
+  // Levels in `texture`, level l (max(1, W >> l) x max(1, H >> l) texels) right after level
+  // l - 1; 1 .. the full chain down to 1 x 1. The caller filters them (eval: box in linear
+  // light), as an engine's mip generation would.
+  uint32_t mip_levels = 1;
   bool repeat = false;  // REPEAT wrapping on both axes, else clamp-to-edge
 };
+
+// Texels in the first `levels` levels of a width x height mip chain (sizes as above).
+size_t mip_chain_texels(uint32_t width, uint32_t height, uint32_t levels);
+// Levels of the full chain of a width x height texture, down to 1 x 1.
+uint32_t mip_chain_levels(uint32_t width, uint32_t height);
 
 // Renders, view after view: coverage (triangle index, kNoMeshTriangle where empty) and
 // `channels` floats a pixel.

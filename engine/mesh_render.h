@@ -17,7 +17,7 @@ using shader::MeshTriangle;
 // integer edge functions in int32 for images up to kMaxSide). Eval cameras frame the whole
 // bounding sphere, so they never drop one.
 constexpr int32_t kGuardBand = 256;
-constexpr uint32_t kMaxSide = 1024;
+constexpr uint32_t kMaxSide = kMeshRenderMaxSide;
 // Nearest w a vertex may have; a triangle with a vertex nearer (or behind) is dropped.
 constexpr double kNearW = 1e-6;
 

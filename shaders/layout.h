@@ -106,6 +106,10 @@ struct MeshPush {
   uint texture_height;
   uint channels;  // 1..4 floats a texel and a pixel
   uint repeat;    // 1: REPEAT wrapping, 0: clamp-to-edge
+  uint mip_levels;  // levels in the texture buffer, level after level (1: bilinear from level 0)
+  uint pad0;
+  uint pad1;
+  uint pad2;
 };
 
 // ---- Re-bake sampling (engine::RebakeTexelsDesc, rebake.comp) ----
@@ -175,7 +179,7 @@ static_assert(sizeof(ViewPush) == 32, "push constant layout");
 static_assert(sizeof(ImageBatchPush) == 16, "push constant layout");
 constexpr uint kMeshTile = 16;            // render_mesh.comp: one 16 x 16 workgroup a tile
 static_assert(sizeof(MeshTriangle) == 64, "std430 layout");
-static_assert(sizeof(MeshPush) == 32, "push constant layout");
+static_assert(sizeof(MeshPush) == 48, "push constant layout");
 constexpr uint kRebakeTile = 16;          // re-bake tiles (host binning, rebake.comp workgroups)
 static_assert(sizeof(RebakeEntry) == 176, "std430 layout");
 static_assert(sizeof(RebakePush) == 64, "push constant layout");

@@ -3,7 +3,8 @@
 // of one view, one invocation per pixel. Triangles come set up and binned by the host
 // (engine/mesh_setup.cpp); every pixel walks its tile's list in increasing triangle index:
 // integer edge functions with a top-left rule, depth 1/w (larger is nearer, ties keep the
-// earlier triangle), perspective-correct texel coordinates and a bilinear sample by hand.
+// earlier triangle), perspective-correct texel coordinates and a bilinear (one level) or
+// trilinear (a mip chain: level of detail from the planes' analytic derivatives) sample by hand.
 // engine/cpu/render_mesh.cpp is the oracle: same operations in the same order.
 #extension GL_GOOGLE_include_directive : require
 #include "layout.h"
@@ -14,7 +15,7 @@ layout(std430, binding = 1) readonly buffer BinOffsets { uint bin_offsets[]; }; 
 layout(std430, binding = 2) readonly buffer BinItems { uint bin_items[]; };      // indices into triangles
 layout(std430, binding = 3) readonly buffer Texture { float texels[]; };
 layout(std430, binding = 4) writeonly buffer Coverage { uint coverage[]; };
-layout(std430, binding = 5) writeonly buffer Pixels { float pixels[]; };
+layout(std430, binding = 5) buffer Pixels { float pixels[]; };
 layout(push_constant) uniform Push { MeshPush p; };
 
 int edge_function(int ax, int ay, int bx, int by, int px, int py) { return (bx - ax) * (py - ay) - (by - ay) * (px - ax); }
@@ -33,6 +34,63 @@ float plane(float c0, float c1, float c2, float fx, float fy) {
 int wrap(int i, int n) {
   int r = i % n;
   return r < 0 ? r + n : r;
+}
+
+// Level l's first texel in the texture buffer: the texels of levels 0 .. l - 1.
+uint level_offset(uint level) {
+  uint n = 0u;
+  for (uint k = 0u; k < level; ++k) n += max(1u, p.texture_width >> k) * max(1u, p.texture_height >> k);
+  return n;
+}
+
+// Adds weight x the bilinear sample of mip level `level` at level-0 texel coordinates
+// (s, t) to pixels[at ..] (first: = instead of +=).
+void sample_level(uint level, float s, float t, float weight, uint at, bool first) {
+  uint C = p.channels;
+  int TW = int(max(1u, p.texture_width >> level)), TH = int(max(1u, p.texture_height >> level));
+  uint base = level_offset(level) * C;
+  if (level > 0u) {
+    // Texel centres of level l: s_l + 0.5 = (s + 0.5) W_l / W.
+    s = (s + 0.5) * (float(TW) / float(p.texture_width)) - 0.5;
+    t = (t + 0.5) * (float(TH) / float(p.texture_height)) - 0.5;
+  }
+  int i0, j0, i1, j1;
+  precise float fs, ft;
+  if (p.repeat != 0u) {
+    s = min(max(s, -16777216.0), 16777216.0);
+    t = min(max(t, -16777216.0), 16777216.0);
+    float fs0 = floor(s), ft0 = floor(t);
+    fs = s - fs0;
+    ft = t - ft0;
+    i0 = wrap(int(fs0), TW);
+    j0 = wrap(int(ft0), TH);
+    i1 = wrap(i0 + 1, TW);
+    j1 = wrap(j0 + 1, TH);
+  } else {
+    s = min(max(s, 0.0), float(TW - 1));
+    t = min(max(t, 0.0), float(TH - 1));
+    float fs0 = floor(s), ft0 = floor(t);
+    fs = s - fs0;
+    ft = t - ft0;
+    i0 = int(fs0);
+    j0 = int(ft0);
+    i1 = min(i0 + 1, TW - 1);
+    j1 = min(j0 + 1, TH - 1);
+  }
+  uint a00 = base + (uint(j0) * uint(TW) + uint(i0)) * C, a10 = base + (uint(j0) * uint(TW) + uint(i1)) * C;
+  uint a01 = base + (uint(j1) * uint(TW) + uint(i0)) * C, a11 = base + (uint(j1) * uint(TW) + uint(i1)) * C;
+  for (uint c = 0u; c < C; ++c) {
+    precise float top = (1.0 - fs) * texels[a00 + c];
+    top += fs * texels[a10 + c];
+    precise float bottom = (1.0 - fs) * texels[a01 + c];
+    bottom += fs * texels[a11 + c];
+    precise float v = (1.0 - ft) * top;
+    v += ft * bottom;
+    if (first)
+      pixels[at + c] = weight == 1.0 ? v : weight * v;
+    else
+      pixels[at + c] += weight * v;
+  }
 }
 
 void main() {
@@ -61,10 +119,9 @@ void main() {
     if (best == 0xffffffffu || z > best_z) { best = id; best_z = z; }
   }
   uint pix = (view * p.height + j) * p.width + i;
-  uint C = p.channels;
   if (best == 0xffffffffu) {
     coverage[pix] = 0xffffffffu;
-    for (uint c = 0u; c < C; ++c) pixels[pix * C + c] = 0.0;
+    for (uint c = 0u; c < p.channels; ++c) pixels[pix * p.channels + c] = 0.0;
     return;
   }
   MeshTriangle r = triangles[best];
@@ -74,39 +131,23 @@ void main() {
   float iw = plane(r.inv_w[0], r.inv_w[1], r.inv_w[2], fx, fy);
   precise float s = plane(r.s_w[0], r.s_w[1], r.s_w[2], fx, fy) / iw;
   precise float t = plane(r.t_w[0], r.t_w[1], r.t_w[2], fx, fy) / iw;
-  int TW = int(p.texture_width), TH = int(p.texture_height);
-  int i0, j0, i1, j1;
-  precise float fs, ft;
-  if (p.repeat != 0u) {
-    s = min(max(s, -16777216.0), 16777216.0);
-    t = min(max(t, -16777216.0), 16777216.0);
-    float fs0 = floor(s), ft0 = floor(t);
-    fs = s - fs0;
-    ft = t - ft0;
-    i0 = wrap(int(fs0), TW);
-    j0 = wrap(int(ft0), TH);
-    i1 = wrap(i0 + 1, TW);
-    j1 = wrap(j0 + 1, TH);
-  } else {
-    s = min(max(s, 0.0), float(TW - 1));
-    t = min(max(t, 0.0), float(TH - 1));
-    float fs0 = floor(s), ft0 = floor(t);
-    fs = s - fs0;
-    ft = t - ft0;
-    i0 = int(fs0);
-    j0 = int(ft0);
-    i1 = min(i0 + 1, TW - 1);
-    j1 = min(j0 + 1, TH - 1);
+  float lod = 0.0;
+  if (p.mip_levels > 1u) {
+    // d(s, t)/d(x, y) of s = S / Iw with S, Iw affine: (S_x - s Iw_x) / Iw.
+    precise float s_x = (r.s_w[1] - s * r.inv_w[1]) / iw;
+    precise float s_y = (r.s_w[2] - s * r.inv_w[2]) / iw;
+    precise float t_x = (r.t_w[1] - t * r.inv_w[1]) / iw;
+    precise float t_y = (r.t_w[2] - t * r.inv_w[2]) / iw;
+    float rho = max(sqrt(s_x * s_x + t_x * t_x), sqrt(s_y * s_y + t_y * t_y));
+    lod = min(log2(max(rho, 1e-30)), float(p.mip_levels - 1u));
   }
-  uint a00 = (uint(j0) * uint(TW) + uint(i0)) * C, a10 = (uint(j0) * uint(TW) + uint(i1)) * C;
-  uint a01 = (uint(j1) * uint(TW) + uint(i0)) * C, a11 = (uint(j1) * uint(TW) + uint(i1)) * C;
-  for (uint c = 0u; c < C; ++c) {
-    precise float top = (1.0 - fs) * texels[a00 + c];
-    top += fs * texels[a10 + c];
-    precise float bottom = (1.0 - fs) * texels[a01 + c];
-    bottom += fs * texels[a11 + c];
-    precise float v = (1.0 - ft) * top;
-    v += ft * bottom;
-    pixels[pix * C + c] = v;
+  uint C = p.channels;
+  if (!(lod > 0.0)) {
+    sample_level(0u, s, t, 1.0, pix * C, true);
+    return;
   }
+  uint l0 = uint(floor(lod)), l1 = min(l0 + 1u, p.mip_levels - 1u);
+  float f = lod - float(l0);
+  sample_level(l0, s, t, 1.0 - f, pix * C, true);
+  sample_level(l1, s, t, f, pix * C, false);
 }

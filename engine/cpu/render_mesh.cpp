@@ -31,6 +31,52 @@ int32_t wrap(int32_t i, int32_t n) {
   return r < 0 ? r + n : r;
 }
 
+// Adds weight x the bilinear sample of mip level `level` at level-0 texel coordinates
+// (s, t) to out (first: out = instead of +=).
+void sample_level(const MeshRenderDesc& d, uint32_t level, float s, float t, float weight, float* out, bool first) {
+  const uint32_t C = d.channels;
+  const int32_t TW = int32_t(std::max(1u, d.texture_width >> level)), TH = int32_t(std::max(1u, d.texture_height >> level));
+  const float* tex = d.texture + mip_chain_texels(d.texture_width, d.texture_height, level) * C;
+  if (level > 0) {
+    // Texel centres of level l: s_l + 0.5 = (s + 0.5) W_l / W.
+    s = (s + 0.5f) * (float(TW) / float(d.texture_width)) - 0.5f;
+    t = (t + 0.5f) * (float(TH) / float(d.texture_height)) - 0.5f;
+  }
+  int32_t i0, j0, i1, j1;
+  float fs, ft;
+  if (d.repeat) {
+    s = std::min(std::max(s, -16777216.0f), 16777216.0f);
+    t = std::min(std::max(t, -16777216.0f), 16777216.0f);
+    const float fs0 = std::floor(s), ft0 = std::floor(t);
+    fs = s - fs0, ft = t - ft0;
+    i0 = wrap(int32_t(fs0), TW), j0 = wrap(int32_t(ft0), TH);
+    i1 = wrap(i0 + 1, TW), j1 = wrap(j0 + 1, TH);
+  } else {
+    s = std::min(std::max(s, 0.0f), float(TW - 1));
+    t = std::min(std::max(t, 0.0f), float(TH - 1));
+    const float fs0 = std::floor(s), ft0 = std::floor(t);
+    fs = s - fs0, ft = t - ft0;
+    i0 = int32_t(fs0), j0 = int32_t(ft0);
+    i1 = std::min(i0 + 1, TW - 1), j1 = std::min(j0 + 1, TH - 1);
+  }
+  const float* t00 = tex + (size_t(j0) * size_t(TW) + size_t(i0)) * C;
+  const float* t10 = tex + (size_t(j0) * size_t(TW) + size_t(i1)) * C;
+  const float* t01 = tex + (size_t(j1) * size_t(TW) + size_t(i0)) * C;
+  const float* t11 = tex + (size_t(j1) * size_t(TW) + size_t(i1)) * C;
+  for (uint32_t c = 0; c < C; ++c) {
+    float top = (1.0f - fs) * t00[c];
+    top += fs * t10[c];
+    float bottom = (1.0f - fs) * t01[c];
+    bottom += fs * t11[c];
+    float v = (1.0f - ft) * top;
+    v += ft * bottom;
+    if (first)
+      out[c] = weight == 1.0f ? v : weight * v;
+    else
+      out[c] += weight * v;
+  }
+}
+
 }  // namespace
 
 void shade_tile(const MeshRenderDesc& d, const ViewSetup& setup, uint32_t tx, uint32_t ty, uint32_t* coverage,
@@ -38,7 +84,6 @@ void shade_tile(const MeshRenderDesc& d, const ViewSetup& setup, uint32_t tx, ui
   const uint32_t bin = ty * tiles_x(d) + tx;
   const uint32_t first = setup.bin_offsets[bin], last = setup.bin_offsets[bin + 1];
   const uint32_t C = d.channels;
-  const int32_t TW = int32_t(d.texture_width), TH = int32_t(d.texture_height);
   for (uint32_t j = ty * shader::kMeshTile; j < std::min(d.height, (ty + 1) * shader::kMeshTile); ++j)
     for (uint32_t i = tx * shader::kMeshTile; i < std::min(d.width, (tx + 1) * shader::kMeshTile); ++i) {
       const int32_t px = 16 * int32_t(i) + 8, py = 16 * int32_t(j) + 8;
@@ -68,38 +113,24 @@ void shade_tile(const MeshRenderDesc& d, const ViewSetup& setup, uint32_t tx, ui
       coverage[p] = r.index;
       const float fx = cx - float(r.x0) * 0.0625f, fy = cy - float(r.y0) * 0.0625f;
       const float iw = plane(r.inv_w, fx, fy);
-      float s = plane(r.s_w, fx, fy) / iw;
-      float t = plane(r.t_w, fx, fy) / iw;
-      int32_t i0, j0, i1, j1;
-      float fs, ft;
-      if (d.repeat) {
-        s = std::min(std::max(s, -16777216.0f), 16777216.0f);
-        t = std::min(std::max(t, -16777216.0f), 16777216.0f);
-        const float fs0 = std::floor(s), ft0 = std::floor(t);
-        fs = s - fs0, ft = t - ft0;
-        i0 = wrap(int32_t(fs0), TW), j0 = wrap(int32_t(ft0), TH);
-        i1 = wrap(i0 + 1, TW), j1 = wrap(j0 + 1, TH);
-      } else {
-        s = std::min(std::max(s, 0.0f), float(TW - 1));
-        t = std::min(std::max(t, 0.0f), float(TH - 1));
-        const float fs0 = std::floor(s), ft0 = std::floor(t);
-        fs = s - fs0, ft = t - ft0;
-        i0 = int32_t(fs0), j0 = int32_t(ft0);
-        i1 = std::min(i0 + 1, TW - 1), j1 = std::min(j0 + 1, TH - 1);
+      const float s = plane(r.s_w, fx, fy) / iw;
+      const float t = plane(r.t_w, fx, fy) / iw;
+      float lod = 0.0f;
+      if (d.mip_levels > 1) {
+        // d(s, t)/d(x, y) of s = S / Iw with S, Iw affine: (S_x - s Iw_x) / Iw.
+        const float s_x = (r.s_w[1] - s * r.inv_w[1]) / iw, s_y = (r.s_w[2] - s * r.inv_w[2]) / iw;
+        const float t_x = (r.t_w[1] - t * r.inv_w[1]) / iw, t_y = (r.t_w[2] - t * r.inv_w[2]) / iw;
+        const float rho = std::max(std::sqrt(s_x * s_x + t_x * t_x), std::sqrt(s_y * s_y + t_y * t_y));
+        lod = std::min(std::log2(std::max(rho, 1e-30f)), float(d.mip_levels - 1));
       }
-      const float* t00 = d.texture + (size_t(j0) * size_t(TW) + size_t(i0)) * C;
-      const float* t10 = d.texture + (size_t(j0) * size_t(TW) + size_t(i1)) * C;
-      const float* t01 = d.texture + (size_t(j1) * size_t(TW) + size_t(i0)) * C;
-      const float* t11 = d.texture + (size_t(j1) * size_t(TW) + size_t(i1)) * C;
-      for (uint32_t c = 0; c < C; ++c) {
-        float top = (1.0f - fs) * t00[c];
-        top += fs * t10[c];
-        float bottom = (1.0f - fs) * t01[c];
-        bottom += fs * t11[c];
-        float v = (1.0f - ft) * top;
-        v += ft * bottom;
-        out[c] = v;
+      if (!(lod > 0.0f)) {
+        sample_level(d, 0, s, t, 1.0f, out, true);
+        continue;
       }
+      const uint32_t l0 = uint32_t(std::floor(lod)), l1 = std::min(l0 + 1, d.mip_levels - 1);
+      const float f = lod - float(l0);
+      sample_level(d, l0, s, t, 1.0f - f, out, true);
+      sample_level(d, l1, s, t, f, out, false);
     }
 }
 

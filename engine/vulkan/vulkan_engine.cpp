@@ -85,7 +85,7 @@ class MeshRenderer {
     MeshRenders out = sized_mesh_renders(d);
     const uint64_t n = uint64_t(d.width) * d.height;
     if (out.count == 0) return out;
-    const uint64_t tex_bytes = 4ull * d.texture_width * d.texture_height * d.channels;
+    const uint64_t tex_bytes = 4ull * mip_chain_texels(d.texture_width, d.texture_height, d.mip_levels) * d.channels;
     if (tex_bytes > max_buffer_)
       throw EngineError("Vulkan render_mesh: the texture exceeds the device's largest buffer");
     vk::Buffer& texture = buffer(texture_, tex_bytes);
@@ -122,7 +122,8 @@ class MeshRenderer {
         t_base += uint32_t(s.triangles.size()), i_base += uint32_t(s.bin_items.size());
       }
       offsets.data<uint32_t>()[count * bins] = i_base;
-      shader::MeshPush push{d.width, d.height, tx, ty, d.texture_width, d.texture_height, d.channels, d.repeat ? 1u : 0u};
+      shader::MeshPush push{d.width,    d.height,          tx, ty, d.texture_width, d.texture_height, d.channels,
+                            d.repeat ? 1u : 0u, d.mip_levels, 0, 0, 0};
       sequence_.begin();
       sequence_.dispatch(kernel_, {&triangles, &offsets, &bin_items, &texture, &coverage, &pixels}, &push, tx, ty, count);
       sequence_.submit_and_wait();

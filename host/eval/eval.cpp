@@ -74,6 +74,28 @@ std::vector<std::array<float, 16>> dodecahedron_cameras(const float* p, size_t n
   return out;
 }
 
+const char* to_string(TextureFilter filter) {
+  return filter == TextureFilter::Trilinear ? "trilinear" : "bilinear";
+}
+
+std::optional<TextureFilter> parse_texture_filter(std::string_view text) {
+  if (text == "trilinear") return TextureFilter::Trilinear;
+  if (text == "bilinear") return TextureFilter::Bilinear;
+  return std::nullopt;
+}
+
+std::array<float, 16> tile_camera(const std::array<float, 16>& m, uint32_t k, uint32_t a, uint32_t b) {
+  // NDC x' = k x + (k - 2a - 1), y' = k y + (2b + 1 - k): rows 0 and 1 rescaled and
+  // shifted by row 3 (clip w).
+  std::array<float, 16> t = m;
+  const double sx = double(k) - 2.0 * a - 1.0, sy = 2.0 * b + 1.0 - double(k);
+  for (int c = 0; c < 4; ++c) {
+    t[size_t(c)] = float(k * double(m[size_t(c)]) + sx * double(m[size_t(12 + c)]));
+    t[size_t(4 + c)] = float(k * double(m[size_t(4 + c)]) + sy * double(m[size_t(12 + c)]));
+  }
+  return t;
+}
+
 namespace {
 
 double seconds_since(std::chrono::steady_clock::time_point t) {
@@ -129,49 +151,101 @@ struct Timing {
   double textures = 0, render = 0, gmsd = 0;
 };
 
-// The mesh and cameras of a layout as a render request (the caller adds the texture).
-engine::MeshRenderDesc render_desc(const LayoutMesh& m, const std::vector<std::array<float, 16>>& cameras,
-                                   uint32_t size) {
+// A texture as the engine samples it: every level of its mip chain (one level when
+// bilinear), `channels` floats a texel, level after level.
+struct Texture {
+  std::vector<float> texels;
+  uint32_t width = 0, height = 0, levels = 1, channels = 1;
+};
+
+// `image` as eval's views sample it: its luminance (GMSD step 1 on the stored values),
+// or with rgb its colour; with the trilinear filter the luminance of each level of the
+// chain an engine would build (mip_chain: box in linear light), as a viewer sees it.
+Texture view_texture(const Image& image, TextureFilter filter, bool rgb = false) {
+  Texture t;
+  t.width = image.width, t.height = image.height, t.channels = rgb ? 3 : 1;
+  t.levels = filter == TextureFilter::Trilinear ? engine::mip_chain_levels(image.width, image.height) : 1;
+  for (const Image& level : mip_chain(image, t.levels)) {
+    if (rgb) {
+      for (size_t i = 0; i < size_t(level.width) * level.height; ++i)
+        for (uint32_t c = 0; c < 3; ++c) t.texels.push_back(level.pixels[i * level.channels + std::min(c, level.channels - 1)]);
+    } else {
+      const auto y = perceptual::luminance_plane(level);
+      t.texels.insert(t.texels.end(), y.begin(), y.end());
+    }
+  }
+  return t;
+}
+
+// Views of more than kMaxSide pixels a side are rendered as k x k tiles (engine cameras
+// that each frame one tile) and stitched. Calls render_mesh on chunks of whole views of
+// about this many pixels, so that a 2048-pixel evaluation never holds more than a few
+// views at once beside the reference's.
+constexpr size_t kChunkPixels = size_t(20) * 1024 * 1024;
+
+uint32_t tiles_per_side(uint32_t res) { return (res + engine::kMeshRenderMaxSide - 1) / engine::kMeshRenderMaxSide; }
+
+// Renders every view of `m` textured with `tex` at res x res pixels, chunk by chunk:
+// fn(first view, views, pixels) with `views` stitched images of res x res x channels.
+template <class Fn>
+void render_views(engine::Engine& engine, const LayoutMesh& m, const Texture& tex,
+                  const std::vector<std::array<float, 16>>& cameras, uint32_t res, Timing& timing, Fn&& fn) {
+  const uint32_t k = tiles_per_side(res), T = res / k, C = tex.channels;
+  const size_t per_chunk = std::max<size_t>(1, kChunkPixels / (size_t(res) * res));
   engine::MeshRenderDesc d;
-  d.width = d.height = size;
-  d.cameras = cameras;
+  d.width = d.height = T;
   d.positions = m.positions.data(), d.vertex_count = m.positions.size() / 3;
   d.indices = m.indices.data(), d.triangle_count = m.indices.size() / 3;
   d.uvs = m.uvs.data();
-  return d;
-}
-
-std::vector<float> luminance_render(engine::Engine& engine, const LayoutMesh& m, const Image& texture,
-                                    const std::vector<std::array<float, 16>>& cameras, uint32_t res, Timing& timing) {
-  std::vector<float> lum = perceptual::luminance_plane(texture);
-  engine::MeshRenderDesc d = render_desc(m, cameras, res);
-  d.texture = lum.data(), d.texture_width = texture.width, d.texture_height = texture.height, d.channels = 1;
+  d.texture = tex.texels.data(), d.texture_width = tex.width, d.texture_height = tex.height;
+  d.channels = C, d.mip_levels = tex.levels;
   d.repeat = m.repeat;
-  const auto t0 = std::chrono::steady_clock::now();
-  auto r = engine.render_mesh(d);
-  timing.render += seconds_since(t0);
-  return std::move(r.pixels);
+  std::vector<float> stitched;
+  for (size_t first = 0; first < cameras.size(); first += per_chunk) {
+    const size_t views = std::min(per_chunk, cameras.size() - first);
+    d.cameras.clear();
+    for (size_t v = first; v < first + views; ++v)
+      for (uint32_t b = 0; b < k; ++b)
+        for (uint32_t a = 0; a < k; ++a) d.cameras.push_back(k == 1 ? cameras[v] : tile_camera(cameras[v], k, a, b));
+    const auto t0 = std::chrono::steady_clock::now();
+    auto r = engine.render_mesh(d);
+    timing.render += seconds_since(t0);
+    if (k == 1) {
+      fn(first, views, r.pixels.data());
+      continue;
+    }
+    stitched.assign(views * res * res * C, 0.0f);
+    for (size_t v = 0; v < views; ++v)
+      for (uint32_t b = 0; b < k; ++b)
+        for (uint32_t a = 0; a < k; ++a) {
+          const float* tile = r.pixels.data() + ((v * k + b) * k + a) * size_t(T) * T * C;
+          for (uint32_t j = 0; j < T; ++j)
+            std::copy(tile + size_t(j) * T * C, tile + size_t(j + 1) * T * C,
+                      stitched.data() + ((v * res + size_t(b) * T + j) * res + size_t(a) * T) * C);
+        }
+    fn(first, views, stitched.data());
+  }
 }
 
-std::vector<float> gmsd_views(engine::Engine& engine, const std::vector<float>& ref, const std::vector<float>& img,
-                              uint32_t res, size_t views, Timing& timing) {
+// GMSD of `count` view pairs of res x res.
+void gmsd_views(engine::Engine& engine, const float* ref, const float* img, uint32_t res, size_t count, float* out,
+                Timing& timing) {
   const auto t0 = std::chrono::steady_clock::now();
-  std::vector<float> out(views);
   if (res <= shader::kViewMaxSize) {
-    engine::ImagePairs pairs{res, res, uint32_t(views), ref.data(), img.data()};
-    out = engine.gmsd(pairs);
+    engine::ImagePairs pairs{res, res, uint32_t(count), ref, img};
+    const auto g = engine.gmsd(pairs);
+    std::copy(g.begin(), g.end(), out);
   } else {
     const size_t n = size_t(res) * res;
-    const unsigned threads = std::max(1u, std::min<unsigned>(std::thread::hardware_concurrency(), unsigned(views)));
+    const unsigned threads = std::max(1u, std::min<unsigned>(std::thread::hardware_concurrency(), unsigned(count)));
     std::vector<std::thread> pool;
-    for (unsigned k = 0; k < threads; ++k)
-      pool.emplace_back([&, k] {
-        for (size_t v = k; v < views; v += threads) out[v] = engine::cpu::gmsd<float>(ref.data() + v * n, img.data() + v * n, res, res);
+    for (unsigned t = 0; t < threads; ++t)
+      pool.emplace_back([&, t] {
+        for (size_t v = t; v < count; v += threads) out[v] = engine::cpu::gmsd<float>(ref + v * n, img + v * n, res, res);
       });
-    for (auto& t : pool) t.join();
+    for (auto& th : pool) th.join();
   }
   timing.gmsd += seconds_since(t0);
-  return out;
 }
 
 // Texture size at relative cost c_r in image texels: W H = c_r ref_texels, `aspect` kept.
@@ -182,13 +256,35 @@ std::pair<uint32_t, uint32_t> size_at(double c_r, double ref_texels, double aspe
   return {W, H};
 }
 
+// What every evaluation of one reference shares: its layout, the cameras, the view
+// resolution and filter, its views and its costs (image texels, and the paper's texels
+// under the charts).
+struct Setup {
+  LayoutMesh ref;
+  std::vector<std::array<float, 16>> cameras;
+  TextureFilter filter = TextureFilter::Trilinear;
+  ViewResolution resolution;
+  std::vector<float> ref_views;  // views x res x res luminance
+  double image_texels = 0, chart_texels = 0;
+  double radius = 0;  // the largest extent of the bounding box
+};
+
 // Mean GMSD of `m` textured with `texture` against the reference views (per view in
-// *per_view): the one place eval turns a texture into q.
-double score_views(engine::Engine& engine, const LayoutMesh& m, const Image& texture,
-                   const std::vector<std::array<float, 16>>& cameras, uint32_t res, const std::vector<float>& ref_views,
-                   Timing& timing, std::vector<float>* per_view = nullptr) {
-  const auto views = luminance_render(engine, m, texture, cameras, res, timing);
-  auto g = gmsd_views(engine, ref_views, views, res, cameras.size(), timing);
+// *per_view): the one place eval turns a texture into q. The noise floor passes cameras
+// and reference views of its own (shifted by a fraction of a pixel).
+double score_views(engine::Engine& engine, const Setup& s, const LayoutMesh& m, const Image& texture, Timing& timing,
+                   std::vector<float>* per_view = nullptr, const std::vector<std::array<float, 16>>* cameras = nullptr,
+                   const std::vector<float>* ref_views = nullptr) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const Texture tex = view_texture(texture, s.filter);
+  timing.textures += seconds_since(t0);
+  const uint32_t res = s.resolution.resolution;
+  const size_t n = size_t(res) * res;
+  const float* ref = (ref_views ? *ref_views : s.ref_views).data();
+  std::vector<float> g(s.cameras.size());
+  render_views(engine, m, tex, cameras ? *cameras : s.cameras, res, timing, [&](size_t first, size_t views, const float* px) {
+    gmsd_views(engine, ref + first * n, px, res, views, g.data() + first, timing);
+  });
   double q = 0;
   for (float x : g) q += x;
   q /= double(g.size());
@@ -196,52 +292,172 @@ double score_views(engine::Engine& engine, const LayoutMesh& m, const Image& tex
   return q;
 }
 
-// What every evaluation of one reference shares: its layout, the cameras, its views and
-// its costs (image texels, and the paper's texels under the charts).
-struct Setup {
-  LayoutMesh ref;
-  std::vector<std::array<float, 16>> cameras;
-  std::vector<float> ref_views;
-  double image_texels = 0, chart_texels = 0;
-  double radius = 0;  // the largest extent of the bounding box
-};
+// Every view of `m` textured with `texture`, res x res luminance each, view after view.
+std::vector<float> luminance_views(engine::Engine& engine, const LayoutMesh& m, const Image& texture,
+                                   const std::vector<std::array<float, 16>>& cameras, uint32_t res,
+                                   TextureFilter filter, Timing& timing) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const Texture tex = view_texture(texture, filter);
+  timing.textures += seconds_since(t0);
+  std::vector<float> out(cameras.size() * res * res);
+  render_views(engine, m, tex, cameras, res, timing, [&](size_t first, size_t views, const float* px) {
+    std::copy(px, px + views * res * res, out.data() + first * res * res);
+  });
+  return out;
+}
+
+// Texels of the reference texture per screen pixel, per covered pixel of every view at
+// `res` (isotropic: sqrt of the ratio of a triangle's texel area to its screen area in
+// that view, per triangle), ascending.
+std::vector<float> texels_per_pixel(engine::Engine& engine, const LayoutMesh& ref,
+                                    const std::vector<std::array<float, 16>>& cameras, uint32_t res, Timing& timing) {
+  const size_t tris = ref.indices.size() / 3;
+  std::vector<double> texel_area(tris);
+  for (size_t t = 0; t < tris; ++t) texel_area[t] = detail::uv_area(ref.uvs, ref.indices, t) * ref.full.width * ref.full.height;
+  Texture flat;  // coverage is all this render is for
+  flat.width = flat.height = 1, flat.texels = {0.0f};
+  engine::MeshRenderDesc d;
+  d.width = d.height = res;
+  d.cameras = cameras;
+  d.positions = ref.positions.data(), d.vertex_count = ref.positions.size() / 3;
+  d.indices = ref.indices.data(), d.triangle_count = tris;
+  d.uvs = ref.uvs.data();
+  d.texture = flat.texels.data(), d.texture_width = d.texture_height = 1, d.channels = 1;
+  const auto t0 = std::chrono::steady_clock::now();
+  const auto r = engine.render_mesh(d);
+  timing.render += seconds_since(t0);
+  std::vector<float> out;
+  std::vector<double> screen(tris);
+  for (size_t v = 0; v < cameras.size(); ++v) {
+    const auto& m = cameras[v];
+    for (size_t t = 0; t < tris; ++t) {
+      double X[3], Y[3];
+      for (int k = 0; k < 3; ++k) {
+        const float* p = ref.positions.data() + 3 * size_t(ref.indices[3 * t + size_t(k)]);
+        double c[4];
+        for (int row = 0; row < 4; ++row)
+          c[row] = double(m[size_t(4 * row)]) * p[0] + double(m[size_t(4 * row + 1)]) * p[1] +
+                   double(m[size_t(4 * row + 2)]) * p[2] + double(m[size_t(4 * row + 3)]);
+        X[k] = (c[0] / c[3] * 0.5 + 0.5) * res, Y[k] = (0.5 - 0.5 * c[1] / c[3]) * res;
+      }
+      screen[t] = 0.5 * std::abs((X[1] - X[0]) * (Y[2] - Y[0]) - (X[2] - X[0]) * (Y[1] - Y[0]));
+    }
+    const size_t n = size_t(res) * res;
+    for (size_t i = 0; i < n; ++i) {
+      const uint32_t t = r.coverage[v * n + i];
+      if (t == engine::kNoMeshTriangle || !(screen[t] > 0)) continue;
+      out.push_back(float(std::sqrt(texel_area[t] / screen[t])));
+    }
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+ViewResolution choose_resolution(engine::Engine& engine, const LayoutMesh& ref,
+                                 const std::vector<std::array<float, 16>>& cameras, const EvalOptions& o,
+                                 Timing& timing) {
+  constexpr uint32_t kProbe = 512;  // the resolution texels per pixel are measured at
+  const auto tpp = texels_per_pixel(engine, ref, cameras, kProbe, timing);
+  ViewResolution r;
+  r.percentile = o.resolution_percentile;
+  auto at = [&](double p) { return tpp.empty() ? 0.0 : double(tpp[std::min(tpp.size() - 1, size_t(p * double(tpp.size())))]); };
+  const double probe_tpp = at(o.resolution_percentile);
+  if (o.resolution == 0) {
+    // The smallest side, a multiple of 16 (and of the tile count), at which the percentile
+    // is magnified or 1:1.
+    uint32_t want = std::max<uint32_t>(512, uint32_t(std::ceil(kProbe * probe_tpp / 16.0)) * 16);
+    r.capped = want > o.resolution_cap;
+    want = std::min(want, o.resolution_cap);
+    const uint32_t k = tiles_per_side(want);
+    r.resolution = (want + 16 * k - 1) / (16 * k) * (16 * k);
+    r.automatic = true;
+  } else {
+    const uint32_t k = tiles_per_side(o.resolution);
+    r.resolution = o.resolution / k * k;
+  }
+  const double scale = double(kProbe) / r.resolution;  // texels per pixel at res = at probe x scale
+  r.texels_per_pixel = probe_tpp * scale;
+  r.texels_per_pixel_median = at(0.5) * scale;
+  // Share of the visible screen area where a pixel covers at most one texel.
+  const float limit = float(1.0 / scale);
+  r.resolved_fraction = tpp.empty() ? 1.0
+                                    : double(std::upper_bound(tpp.begin(), tpp.end(), limit) - tpp.begin()) / double(tpp.size());
+  return r;
+}
 
 Setup set_up(const io::GltfFile& reference, engine::Engine& engine, const EvalOptions& o, Timing& timing) {
   if (o.cost_grid.empty()) throw InputError(reference.path, "empty cost grid");
   for (double c : o.cost_grid)
     if (!(c > 0 && c <= 4)) throw InputError(reference.path, "cost grid values must lie in (0, 4]");
-  if (o.resolution < 8 || o.resolution > 1024) throw InputError(reference.path, "resolution must be 8..1024");
+  if (o.resolution != 0 && (o.resolution < 8 || o.resolution > kMaxResolution))
+    throw InputError(reference.path, "resolution must be 8.." + std::to_string(kMaxResolution) + " or auto");
+  if (o.resolution_cap < 512 || o.resolution_cap > kMaxResolution)
+    throw InputError(reference.path, "resolution cap must be 512.." + std::to_string(kMaxResolution));
+  if (!(o.resolution_percentile > 0 && o.resolution_percentile <= 1))
+    throw InputError(reference.path, "resolution percentile must lie in (0, 1]");
   Setup s;
   s.ref = detail::extract_layout(reference, "input");
   const LayoutMesh& ref = s.ref;
   s.cameras = dodecahedron_cameras(ref.positions.data(), ref.positions.size() / 3, o.fov_degrees);
+  s.filter = o.filter;
   s.image_texels = double(ref.full.width) * ref.full.height;
   s.chart_texels = s.image_texels * ref.uv_area;
   double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
   for (size_t v = 0; v < ref.positions.size() / 3; ++v)
     for (int d = 0; d < 3; ++d) lo[d] = std::min(lo[d], double(ref.positions[3 * v + size_t(d)])), hi[d] = std::max(hi[d], double(ref.positions[3 * v + size_t(d)]));
   for (int d = 0; d < 3; ++d) s.radius = std::max(s.radius, hi[d] - lo[d]);
-  s.ref_views = luminance_render(engine, ref, ref.full, s.cameras, o.resolution, timing);
+  s.resolution = choose_resolution(engine, ref, s.cameras, o, timing);
+  const uint32_t res = s.resolution.resolution;
+  s.ref_views = luminance_views(engine, ref, ref.full, s.cameras, res, s.filter, timing);
+  if (o.noise_floor) {
+    // How far q moves when only the sampling phase does: the input resized to half its
+    // texels (Lanczos-3) scored as usual, again with the cameras and the reference views
+    // shifted by a quarter pixel (two directions), and resized to 1, 2 and 3 texels more a
+    // side; the largest change. Differences between layouts below it are not claimed.
+    auto [W, H] = size_at(0.5, s.image_texels, double(ref.full.width) / ref.full.height);
+    const Image half = resize_lanczos3(ref.full, W, H, false);
+    const double q = score_views(engine, s, ref, half, timing);
+    for (const double dy : {0.25, -0.25}) {
+      auto jittered = s.cameras;
+      const double sx = 2.0 * 0.25 / res, sy = 2.0 * dy / res;  // NDC units
+      for (auto& m : jittered)
+        for (int c = 0; c < 4; ++c) {
+          m[size_t(c)] = float(double(m[size_t(c)]) + sx * double(m[size_t(12 + c)]));
+          m[size_t(4 + c)] = float(double(m[size_t(4 + c)]) + sy * double(m[size_t(12 + c)]));
+        }
+      const auto ref_jittered = luminance_views(engine, ref, ref.full, jittered, res, s.filter, timing);
+      const double qj = score_views(engine, s, ref, half, timing, nullptr, &jittered, &ref_jittered);
+      s.resolution.noise_floor = std::max(s.resolution.noise_floor, std::abs(qj - q));
+    }
+    // The texel grid's phase too: one, two and three texels more a side (under 2 % more
+    // texels: no trend to see) move every edge of the resized texture against the screen.
+    for (uint32_t more = 1; more <= 3; ++more) {
+      const Image next = resize_lanczos3(ref.full, W + more, H + more, false);
+      s.resolution.noise_floor = std::max(s.resolution.noise_floor, std::abs(score_views(engine, s, ref, next, timing) - q));
+    }
+  }
   return s;
 }
 
 // A layout as written: its own texture at its real size, its own sampler.
-Scored score_own(engine::Engine& engine, const Setup& s, const LayoutMesh& own, uint32_t res, Timing& timing) {
+Scored score_own(engine::Engine& engine, const Setup& s, const LayoutMesh& own, Timing& timing) {
   Scored r;
   const double texels = double(own.full.width) * own.full.height;
   r.c_r = texels / s.image_texels;
   r.c_r_chart = texels * own.uv_area / s.chart_texels;
-  r.q = score_views(engine, own, own.full, s.cameras, res, s.ref_views, timing, &r.q_views);
+  r.q = score_views(engine, s, own, own.full, timing, &r.q_views);
   return r;
 }
 
 // A 5 x 4 sheet of RGB renders (values clamped to [0,1]).
 Image contact_sheet(engine::Engine& engine, const LayoutMesh& m, const Image& texture,
-                    const std::vector<std::array<float, 16>>& cameras, uint32_t thumb) {
-  engine::MeshRenderDesc d = render_desc(m, cameras, thumb);
-  d.texture = texture.pixels.data(), d.texture_width = texture.width, d.texture_height = texture.height, d.channels = 3;
-  d.repeat = m.repeat;
-  auto r = engine.render_mesh(d);
+                    const std::vector<std::array<float, 16>>& cameras, uint32_t thumb, TextureFilter filter) {
+  const Texture tex = view_texture(texture, filter, true);
+  std::vector<float> pixels(cameras.size() * thumb * thumb * 3);
+  Timing ignored;
+  render_views(engine, m, tex, cameras, thumb, ignored, [&](size_t first, size_t views, const float* px) {
+    std::copy(px, px + views * thumb * thumb * 3, pixels.data() + first * thumb * thumb * 3);
+  });
   Image sheet;
   const uint32_t cols = 5, rows = uint32_t((cameras.size() + cols - 1) / cols);
   sheet.width = cols * thumb, sheet.height = rows * thumb, sheet.channels = 3, sheet.bits = 8;
@@ -252,7 +468,7 @@ Image contact_sheet(engine::Engine& engine, const LayoutMesh& m, const Image& te
         for (uint32_t c = 0; c < 3; ++c) {
           const size_t x = (v % cols) * thumb + i, y = (v / cols) * thumb + j;
           sheet.pixels[(y * sheet.width + x) * 3 + c] =
-              std::clamp(r.pixels[((v * thumb + j) * thumb + i) * 3 + c], 0.0f, 1.0f);
+              std::clamp(pixels[((v * thumb + j) * thumb + i) * 3 + c], 0.0f, 1.0f);
         }
   return sheet;
 }
@@ -309,22 +525,22 @@ Image uv_plot(const LayoutMesh& m, double aspect, double* spread) {
 
 struct AsWrittenScorer::State {
   engine::Engine& engine;
-  uint32_t resolution;
   Timing timing;
   Setup setup;
 };
 
 AsWrittenScorer::AsWrittenScorer(const io::GltfFile& reference, engine::Engine& engine, const EvalOptions& o)
-    : state_(new State{engine, o.resolution, {}, {}}) {
+    : state_(new State{engine, {}, {}}) {
   state_->setup = set_up(reference, engine, o, state_->timing);
 }
 
 AsWrittenScorer::~AsWrittenScorer() = default;
 
 Scored AsWrittenScorer::score(const io::GltfFile& candidate) {
-  return score_own(state_->engine, state_->setup, detail::extract_layout(candidate, "candidate"), state_->resolution,
-                   state_->timing);
+  return score_own(state_->engine, state_->setup, detail::extract_layout(candidate, "candidate"), state_->timing);
 }
+
+const ViewResolution& AsWrittenScorer::resolution() const { return state_->setup.resolution; }
 
 Scored score_as_written(const io::GltfFile& reference, const io::GltfFile& candidate, engine::Engine& engine,
                         const EvalOptions& o) {
@@ -339,7 +555,6 @@ nlohmann::ordered_json evaluate(const io::GltfFile& reference, const std::vector
   const Setup s = set_up(reference, engine, o, timing);
   const LayoutMesh& ref = s.ref;
   const auto& cameras = s.cameras;
-  const uint32_t res = o.resolution;
 
   // The layouts with their full textures and aspects.
   struct Entry {
@@ -386,7 +601,7 @@ nlohmann::ordered_json evaluate(const io::GltfFile& reference, const std::vector
     e.aspect = double(e.mesh.full.width) / e.mesh.full.height;
     // What the user will see: the file's own texture at its real size, its own sampler.
     if (progress) progress("as written " + e.mesh.name, 0, 1);
-    e.as_written = score_own(engine, s, e.mesh, res, timing);
+    e.as_written = score_own(engine, s, e.mesh, timing);
     e.scored_as_written = true;
     e.written_size[0] = e.mesh.full.width, e.written_size[1] = e.mesh.full.height;
     if (detail::same_triangles(ref, e.mesh, 1e-5 * s.radius)) {
@@ -419,7 +634,7 @@ nlohmann::ordered_json evaluate(const io::GltfFile& reference, const std::vector
     if (std::abs(std::log(c / want)) < std::abs(std::log(contact / want))) contact = c;
   const uint32_t thumb = std::clamp<uint32_t>(o.thumbnail, 8, 1024);
   if (artifacts && o.artifacts) {
-    artifacts->reference_contact = contact_sheet(engine, ref, ref.full, cameras, thumb);
+    artifacts->reference_contact = contact_sheet(engine, ref, ref.full, cameras, thumb, o.filter);
     artifacts->layouts.clear();
   }
 
@@ -428,9 +643,17 @@ nlohmann::ordered_json evaluate(const io::GltfFile& reference, const std::vector
   report["asset"] = reference.path;
   report["device"] = {{"backend", dev.backend}, {"name", dev.name}, {"type", dev.type}, {"threads", dev.threads}};
   report["views"] = cameras.size();
-  report["resolution"] = res;
+  report["resolution"] = s.resolution.resolution;
+  report["resolution_mode"] = s.resolution.automatic ? "auto" : "fixed";
+  report["resolution_cap"] = o.resolution_cap;
+  report["resolution_capped"] = s.resolution.capped;
+  report["texels_per_pixel"] = {{"percentile", s.resolution.percentile},
+                                {"value", s.resolution.texels_per_pixel},
+                                {"median", s.resolution.texels_per_pixel_median}};
+  report["resolved_fraction"] = s.resolution.resolved_fraction;
+  report["noise_floor"] = o.noise_floor ? nlohmann::ordered_json(s.resolution.noise_floor) : nlohmann::ordered_json(nullptr);
   report["fov_degrees"] = o.fov_degrees;
-  report["texture_filter"] = "bilinear (no mip-maps)";
+  report["texture_filter"] = to_string(o.filter);
   report["triangles"] = ref.indices.size() / 3;
   report["reference"] = {{"file", reference.path}, {"image", ref.image},           {"width", ref.full.width},
                          {"height", ref.full.height}, {"uv_area", ref.uv_area}, {"image_texels", s.image_texels},
@@ -461,7 +684,7 @@ nlohmann::ordered_json evaluate(const io::GltfFile& reference, const std::vector
       const Image tex = resize(m.full, W, H);
       timing.textures += seconds_since(t0);
       std::vector<float> g;
-      const double q = score_views(engine, m, tex, cameras, res, s.ref_views, timing, &g);
+      const double q = score_views(engine, s, m, tex, timing, &g);
       const double actual = double(W) * H / s.image_texels;
       const double chart = double(W) * H * m.uv_area / s.chart_texels;
       c.points.push_back({{"c_r", c_r}, {"c_r_actual", actual}, {"c_r_chart", chart}, {"r", W}, {"width", W},
@@ -521,7 +744,7 @@ nlohmann::ordered_json evaluate(const io::GltfFile& reference, const std::vector
       auto [W, H] = size_at(contact, s.image_texels, e.aspect);
       LayoutArtifacts a;
       a.name = m.name;
-      a.contact = contact_sheet(engine, m, (*resize)(m.full, W, H), cameras, thumb);
+      a.contact = contact_sheet(engine, m, (*resize)(m.full, W, H), cameras, thumb, o.filter);
       a.uv_plot = plot;
       artifacts->layouts.push_back(std::move(a));
     }

@@ -4,11 +4,29 @@
 // - Cameras: 20, at the vertices of a regular dodecahedron around the mesh's bounding
 //   sphere, looking at its centre, perspective (vertical field of view 30 degrees, the
 //   sphere just inside the frame), square images of `resolution` pixels.
+// - Resolution (auto, the default): views that resolve the reference texture. Texels per
+//   screen pixel are measured per covered pixel of the 20 views at 512 px (isotropic: the
+//   square root of a triangle's texel area over its screen area in that view); the side is
+//   the smallest multiple of 16, at least 512, at which the `resolution_percentile` (95 %)
+//   of the visible screen area is magnified or 1:1, capped at `resolution_cap` (2048: 20
+//   reference views of 2048^2 floats are 320 MiB, and every render costs 16x a 512-px
+//   one). Views wider than the engine's 1024-px limit are rendered in tiles (one camera a
+//   tile) and stitched. Report: resolution, resolution_capped, texels_per_pixel (at the
+//   percentile and the median, at the chosen side), resolved_fraction (share of the
+//   visible screen area magnified or 1:1 there). A fixed --resolution reports the same.
+//   At a side that resolves the texture, losing texels shows; at one that minifies it,
+//   each pixel takes one sample of several texels and q is mostly aliasing pattern.
 // - Renders: engine->render_mesh (CPU backend = oracle, Vulkan kernel render_mesh.comp).
-//   Texture filter: bilinear by hand in fp32, no mip-maps. At c_r <= 1 the layouts'
-//   textures have about the reference's texel density or less, and the reference is rendered
-//   from the same views with the same filter, so magnification dominates; mip-maps would
-//   blur both images alike and hide exactly the texel-density differences eval measures.
+//   Texture filter (`filter`): trilinear by default, as engines sample (the texture's mip
+//   chain built as engines build it: box filter in linear light, see resize.h), so that
+//   parts of the asset seen from afar are filtered rather than aliased; bilinear samples
+//   level 0 only (the paper's renderer). Both in fp32 by hand, both backends alike.
+// - Noise floor (report: noise_floor): how far q moves when only the sampling phase
+//   does. The input resized to half its texels is scored as usual, again with the cameras
+//   and the reference views shifted by a quarter pixel (two directions), and resized to
+//   1, 2 and 3 texels more a side (the texel grid's phase; under 2 % more texels); the
+//   largest change.
+//   Differences in q below it are sampling phase, not texture, and are not claimed.
 // - Reference: the input (first file) layout with its full texture, luminance.
 // - Layouts: "input" (the reference's own UVs), with `paper_baseline` "input-rebaked" (the
 //   same UVs, re-baked like every other layout: the paper's protocol, so figures can be set
@@ -51,14 +69,27 @@
 
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace uvpress::eval {
 
+// How the views sample textures (see above).
+enum class TextureFilter { Bilinear, Trilinear };
+const char* to_string(TextureFilter filter);
+std::optional<TextureFilter> parse_texture_filter(std::string_view text);
+
+constexpr uint32_t kMaxResolution = 4096;  // views of more than 1024 px are tiled
+
 struct EvalOptions {
   std::vector<double> cost_grid = {0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0};
-  uint32_t resolution = 512;  // view images, pixels a side (8..1024)
+  uint32_t resolution = 0;  // view images, pixels a side (8..kMaxResolution); 0: auto (see above)
+  uint32_t resolution_cap = 2048;       // auto: the largest side (512..kMaxResolution)
+  double resolution_percentile = 0.95;  // auto: share of the visible screen area to resolve
+  TextureFilter filter = TextureFilter::Trilinear;
+  bool noise_floor = true;  // measure and report the quarter-pixel noise floor (one more render)
   bool flatten = false;       // add the isometric layout
   bool paper_baseline = false;  // add "input-rebaked": the input layout re-baked like the others (§5.1)
   double contact_cost = 0;    // c_r of the contact sheet; 0: the grid point nearest 0.25
@@ -88,7 +119,9 @@ using Progress = std::function<void(const std::string& stage, size_t done, size_
 
 // Evaluates the reference's own layout ("input"), "input-rebaked" when
 // options.paper_baseline, each of `others`, and the isometric layout when options.flatten.
-// The report (see README): asset, device, views, resolution, reference {image_texels,
+// The report (see README): asset, device, views, resolution (and resolution_mode,
+// resolution_cap, resolution_capped, texels_per_pixel, resolved_fraction, noise_floor),
+// texture_filter, reference {image_texels,
 // chart_texels, ...}, cost_measure ("image_texels"), input_resize ("lanczos3-srgb" |
 // "lanczos3-linear"), cost_grid, layouts [{name, file, texture, resize, uv_area, full_size,
 // as_written {c_r, c_r_chart, q, width, height} (others only), curve [{c_r, c_r_actual,
@@ -107,6 +140,17 @@ nlohmann::ordered_json evaluate(const io::GltfFile& reference, const std::vector
 // charts, relative). The candidate need not share the reference's triangles, only its
 // surface (the cameras frame the reference). reparam's "never worse" guard compares its
 // result with a resized input this way. Throws InputError as evaluate does.
+// The view resolution an evaluation chose and what it resolves (see above).
+struct ViewResolution {
+  uint32_t resolution = 512;  // pixels a side
+  bool automatic = false, capped = false;
+  double percentile = 0.95;
+  double texels_per_pixel = 0;         // at the percentile, at `resolution`
+  double texels_per_pixel_median = 0;  // at `resolution`
+  double resolved_fraction = 0;        // visible screen area with <= 1 texel per pixel
+  double noise_floor = 0;              // quarter-pixel jitter q (0 when not measured)
+};
+
 struct Scored {
   double c_r = 0, q = 0;
   double c_r_chart = 0;
@@ -122,6 +166,7 @@ class AsWrittenScorer {
   AsWrittenScorer(const io::GltfFile& reference, engine::Engine& engine, const EvalOptions& options = {});
   ~AsWrittenScorer();
   Scored score(const io::GltfFile& candidate);
+  const ViewResolution& resolution() const;
 
  private:
   struct State;
@@ -141,6 +186,11 @@ void write_html_report(const nlohmann::ordered_json& report, const EvalArtifacts
 // bounding sphere of `positions`.
 std::vector<std::array<float, 16>> dodecahedron_cameras(const float* positions, size_t vertex_count,
                                                         double fov_degrees = 30);
+
+// A view's camera restricted to tile (a, b) of k x k (a from the left, b from the top):
+// pixel (i, j) of the tile's render is pixel (a T + i, b T + j) of the whole view's, T the
+// tile's side. How views wider than the engine's limit are rendered.
+std::array<float, 16> tile_camera(const std::array<float, 16>& camera, uint32_t k, uint32_t a, uint32_t b);
 
 // Savings of curve A against curve B: points (cost, q) by increasing cost. Returns the
 // geometric mean ratio c_A / c_B at equal q and the number of q levels used (0: the

@@ -6,6 +6,7 @@
 #include "core/image.h"
 
 #include <cstdint>
+#include <vector>
 
 namespace uvpress::eval {
 
@@ -25,5 +26,12 @@ Image resize_area(const Image& image, uint32_t width, uint32_t height);
 // they do in those tools). Results are clamped to [0,1]: Lanczos rings at edges. The same
 // size copies exactly. Throws std::runtime_error when OpenImageIO fails.
 Image resize_lanczos3(const Image& image, uint32_t width, uint32_t height, bool linear_light);
+
+// The mip chain an engine builds for a colour texture (glGenerateMipmap on an sRGB
+// texture): `levels` images, level 0 the image itself and level l of max(1, W >> l) x
+// max(1, H >> l) texels, each the exact box (area) filter of the level above in linear
+// light (colour channels decoded before and encoded after, alpha as stored), as
+// glGenerateMipmap builds it. What eval's trilinear views sample.
+std::vector<Image> mip_chain(const Image& image, uint32_t levels);
 
 }  // namespace uvpress::eval

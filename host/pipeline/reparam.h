@@ -6,6 +6,7 @@
 #pragma once
 
 #include "engine.h"
+#include "eval/eval.h"
 #include "io/gltf_io.h"
 #include "perceptual/triangle_stage.h"
 
@@ -52,6 +53,10 @@ struct ReparamOptions {
   // (its shapes as they are, only the budget changes) and scored as written: the report's
   // `curve` [{c_r, q}], reparam's own q-c curve.
   std::vector<double> curve_costs;
+  // The views candidates, the guard, --max-gmsd and the curve are scored with: eval's
+  // resolution (0: auto) and texture filter (host/eval/eval.h).
+  uint32_t score_resolution = 0;
+  eval::TextureFilter score_filter = eval::TextureFilter::Trilinear;
   perceptual::TriangleStageOptions triangle;
 };
 

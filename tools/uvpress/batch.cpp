@@ -98,7 +98,8 @@ void add_batch(CLI::App& app, Globals& g) {
   cmd->add_flag("--force-reparam", [a](int64_t) { a->o.reparam.guard = false; },
                 "Write reparam's layout even when a plain resize to the same texels looks better");
   cmd->add_flag("--eval", o.eval, "Also evaluate each result against its input (NAME.eval.json)");
-  cmd->add_option("--eval-resolution", o.eval_options.resolution, "eval: view images, pixels a side")->capture_default_str()->check(CLI::Range(8u, 1024u));
+  add_view_options(cmd, o.eval_options.resolution, o.eval_options.filter, "--eval-");
+  add_view_options(cmd, o.reparam.score_resolution, o.reparam.score_filter, "--score-");
   cmd->add_option("--eval-cost-grid", a->grid, "eval: relative costs, each in (0, 4], comma-separated")
       ->delimiter(',')
       ->check(cost_grid_value());

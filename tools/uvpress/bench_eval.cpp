@@ -15,15 +15,15 @@ namespace uvpress::cli {
 void add_bench_eval(CLI::App& bench, Globals& g) {
   auto* cmd = bench.add_subcommand("eval", "Seconds for a full eval curve (20 views, default c_r grid) per backend");
   auto asset = std::make_shared<std::string>("../shared/assets/Duck/glTF-Binary/Duck.glb");
-  auto resolution = std::make_shared<uint32_t>(512);
+  auto view = std::make_shared<eval::EvalOptions>();
   cmd->add_option("--asset", *asset, "glTF asset")->capture_default_str();
-  cmd->add_option("--resolution", *resolution, "View images, pixels a side")->capture_default_str()->check(CLI::Range(8u, 1024u));
-  cmd->callback([&g, asset, resolution] {
-    g.action = [&g, asset, resolution] {
+  add_view_options(cmd, view->resolution, view->filter, "--");
+  cmd->callback([&g, asset, view] {
+    g.action = [&g, asset, view] {
       if (!std::filesystem::exists(*asset)) throw InputError(*asset, "file not found (give --asset PATH)");
       io::GltfFile file = io::load_gltf(*asset, g.refs());
       eval::EvalOptions o;
-      o.resolution = *resolution;
+      o.resolution = view->resolution, o.filter = view->filter;
       o.artifacts = false;
       for (auto& b : available_backends(g)) {
         const auto t0 = std::chrono::steady_clock::now();
@@ -38,7 +38,9 @@ void add_bench_eval(CLI::App& bench, Globals& g) {
                                        {"asset", *asset},
                                        {"triangles", report["triangles"]},
                                        {"views", report["views"]},
-                                       {"resolution", *resolution},
+                                       {"resolution", report["resolution"]},
+                                       {"filter", report["texture_filter"]},
+                                       {"resolved_fraction", report["resolved_fraction"]},
                                        {"c_r_points", o.cost_grid.size()},
                                        {"seconds", s},
                                        {"render_s", report["seconds"]["render"]},

@@ -38,7 +38,7 @@ void add_bench_quality(CLI::App& bench, Globals& g) {
     std::vector<std::string> assets;
     std::string shared = "../shared/assets";
     pipeline::ReparamOptions reparam;
-    uint32_t resolution = 512;
+    eval::EvalOptions view;  // eval's resolution and filter
     bool only_given = false;
   };
   auto a = std::make_shared<Args>();
@@ -48,7 +48,8 @@ void add_bench_quality(CLI::App& bench, Globals& g) {
   cmd->add_option("--cost", a->reparam.cost, "reparam --cost")->capture_default_str()->check(CLI::Range(0.001, 1.0));
   cmd->add_option("--evaluations", a->reparam.triangle.evaluations, "reparam --evaluations")->capture_default_str()->check(CLI::Range(11, 1000));
   cmd->add_flag("--early-stop", a->reparam.triangle.early_stop, "reparam --early-stop");
-  cmd->add_option("--resolution", a->resolution, "eval view size, pixels")->capture_default_str()->check(CLI::Range(64u, 1024u));
+  add_view_options(cmd, a->view.resolution, a->view.filter, "--");
+  add_view_options(cmd, a->reparam.score_resolution, a->reparam.score_filter, "--score-");
   cmd->callback([&g, a] {
     g.action = [&g, a] {
       const auto inputs = bench_assets(a->shared, a->only_given, a->assets);  // name, path ("" = the demo)
@@ -80,7 +81,7 @@ void add_bench_quality(CLI::App& bench, Globals& g) {
           why = "reparam left every layout untouched";
         } else {
           eval::EvalOptions eo;
-          eo.resolution = a->resolution;
+          eo.resolution = a->view.resolution, eo.filter = a->view.filter;
           eo.flatten = true;
           eo.artifacts = false;
           auto ev = eval::evaluate(input, {{"reparam", &layout}}, *engine, eo);

@@ -6,6 +6,8 @@
 #include "io/references.h"
 
 #include <CLI/CLI.hpp>
+
+#include "eval/eval.h"
 #include <nlohmann/json.hpp>
 
 #include <chrono>
@@ -48,6 +50,10 @@ void add_batch(CLI::App& app, Globals& g);
 
 // Checks one --cost-grid value: a number in (0, 4] (usage error otherwise).
 CLI::Validator cost_grid_value();
+// eval's view options on `cmd`: PREFIXresolution auto|N (0 = auto) and PREFIXfilter
+// trilinear|bilinear (prefix "--" for eval and the benches, "--eval-" for batch's eval,
+// "--score-" for the views reparam scores its candidates and guard with).
+void add_view_options(CLI::App* cmd, uint32_t& resolution, eval::TextureFilter& filter, const std::string& prefix);
 
 // "1.2 MB"-style size for summary lines.
 std::string human_bytes(uint64_t bytes);

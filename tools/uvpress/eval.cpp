@@ -1,5 +1,5 @@
 // uvpress eval REFERENCE [OTHER ...] [--flatten] [--paper-baseline] [--cost-grid ...]
-//   [--resolution N] [--report FILE.json] [--html DIR]: perceptual quality against pixel
+//   [--resolution auto|N] [--filter trilinear|bilinear] [--report FILE.json] [--html DIR]: perceptual quality against pixel
 // cost (image texels) over 20 dodecahedron views (seed paper 001, section 5.1) for the
 // reference's layout (resized as users do), each other glTF of the same mesh (and as
 // written), and the isometric (flatten) layout; see host/eval/eval.h.
@@ -25,6 +25,33 @@ CLI::Validator cost_grid_value() {
       "in (0, 4]");
 }
 
+void add_view_options(CLI::App* cmd, uint32_t& resolution, eval::TextureFilter& filter, const std::string& prefix) {
+  cmd->add_option_function<std::string>(
+         prefix + "resolution",
+         [&resolution, prefix](const std::string& v) {
+           if (v == "auto") {
+             resolution = 0;
+             return;
+           }
+           uint32_t n = 0;
+           if (!CLI::detail::lexical_cast(v, n) || n < 8 || n > eval::kMaxResolution)
+             throw CLI::ValidationError(prefix + "resolution", "must be auto or 8.." + std::to_string(eval::kMaxResolution));
+           resolution = n;
+         },
+         "View images, pixels a side, or auto: the smallest side >= 512 at which 95% of the visible surface shows "
+         "at most one texel per pixel, capped at 2048 (default auto)")
+      ->type_name("auto|N");
+  cmd->add_option_function<std::string>(
+         prefix + "filter",
+         [&filter, prefix](const std::string& v) {
+           const auto f = eval::parse_texture_filter(v);
+           if (!f) throw CLI::ValidationError(prefix + "filter", "must be trilinear or bilinear");
+           filter = *f;
+         },
+         "How views sample textures: trilinear (mip-mapped, as engines do; default) or bilinear (level 0 only)")
+      ->type_name("trilinear|bilinear");
+}
+
 void add_eval(CLI::App& app, Globals& g) {
   auto* cmd = app.add_subcommand("eval", "Quality (mean GMSD over 20 views) against pixel cost for several UV layouts");
   struct Args {
@@ -33,7 +60,7 @@ void add_eval(CLI::App& app, Globals& g) {
     bool flatten = false;
     bool paper_baseline = false;
     std::vector<double> grid;
-    uint32_t resolution = 512;
+    eval::EvalOptions view;  // resolution and filter
     double contact = 0;
     std::string html;
   };
@@ -48,7 +75,7 @@ void add_eval(CLI::App& app, Globals& g) {
   cmd->add_option("--cost-grid", a->grid, "Relative costs c_r, each in (0, 4], comma-separated (default 0.1,0.2,...,1.0)")
       ->delimiter(',')
       ->check(cost_grid_value());
-  cmd->add_option("--resolution", a->resolution, "View images, pixels a side")->capture_default_str()->check(CLI::Range(8u, 1024u));
+  add_view_options(cmd, a->view.resolution, a->view.filter, "--");
   cmd->add_option("--contact-cost", a->contact, "c_r of the contact sheet (default: the grid point nearest 0.25)");
   cmd->add_option("--html", a->html, "Write an offline HTML report into this folder");
   cmd->callback([&g, a] {
@@ -71,7 +98,7 @@ void add_eval(CLI::App& app, Globals& g) {
       auto engine = g.make_engine();
       eval::EvalOptions o;
       if (!a->grid.empty()) o.cost_grid = a->grid;
-      o.resolution = a->resolution;
+      o.resolution = a->view.resolution, o.filter = a->view.filter;
       o.flatten = a->flatten;
       o.paper_baseline = a->paper_baseline;
       o.contact_cost = a->contact;
@@ -101,9 +128,13 @@ void add_eval(CLI::App& app, Globals& g) {
                         s["vs"].get<std::string>().c_str(), 100 * s["pixel_ratio_at_equal_q"].get<double>());
           summary += buf;
         }
-      std::printf("eval: %zu layouts x %zu costs (image texels; input resized %s), %d views at %u px in %.1f s%s\n",
+      std::printf("eval: %zu layouts x %zu costs (image texels; input resized %s), %d views at %u px (%s, %.0f%% of "
+                  "the surface resolved), noise floor q %.2g, in %.1f s%s\n",
                   report["layouts"].size(), o.cost_grid.size(), report["input_resize"].get<std::string>().c_str(),
-                  report["views"].get<int>(), o.resolution, report["seconds"]["total"].get<double>(), summary.c_str());
+                  report["views"].get<int>(), report["resolution"].get<unsigned>(),
+                  report["texture_filter"].get<std::string>().c_str(), 100 * report["resolved_fraction"].get<double>(),
+                  report["noise_floor"].is_null() ? 0.0 : report["noise_floor"].get<double>(),
+                  report["seconds"]["total"].get<double>(), summary.c_str());
       return 0;
     };
   });

@@ -1,0 +1,324 @@
+// eval's yardstick (issue 14): trilinear mip-mapped views on both backends, views larger
+// than the engine's limit rendered in tiles, the automatic view resolution and the noise
+// floor, and the input curve's monotonicity on the shared assets.
+#include <catch2/catch.hpp>
+
+#include "engine.h"
+#include "eval/eval.h"
+#include "eval/resize.h"
+#include "io/asset.h"
+#include "io/gltf_io.h"
+#include "io/image_io.h"
+#include "perceptual/triangle_view.h"
+#include "pipeline/demo_asset.h"
+#include "support.h"
+
+#include <cmath>
+#include <random>
+
+using namespace uvpress;
+
+namespace {
+
+// A square (-1..1 in x and y at z = 0) seen by an affine camera that maps it onto the
+// whole image (clip w = 1), UVs from 0 to 1.
+struct Square {
+  std::vector<float> pos = {-1, -1, 0, 1, -1, 0, 1, 1, 0, -1, 1, 0};
+  std::vector<float> uv = {0, 1, 1, 1, 1, 0, 0, 0};
+  std::vector<uint32_t> ix = {0, 1, 2, 0, 2, 3};
+  engine::MeshRenderDesc desc(uint32_t size) const {
+    engine::MeshRenderDesc d;
+    d.width = d.height = size;
+    d.cameras = {{1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 0, 0, 0, 0, 0, 1}};
+    d.positions = pos.data(), d.vertex_count = 4, d.indices = ix.data(), d.triangle_count = 2, d.uvs = uv.data();
+    return d;
+  }
+};
+
+// A mip chain whose level l is the constant l / 10: the sampled value is then the level
+// of detail over 10, so a render shows the LOD the kernel chose.
+std::vector<float> lod_chain(uint32_t w, uint32_t h, uint32_t levels) {
+  std::vector<float> t;
+  for (uint32_t l = 0; l < levels; ++l) t.insert(t.end(), size_t(std::max(1u, w >> l)) * std::max(1u, h >> l), float(l) / 10);
+  return t;
+}
+
+std::unique_ptr<engine::Engine> lavapipe() {
+  engine::EngineOptions o;
+  o.validation = true;
+  return engine::make_vulkan_engine(engine::DeviceRequest::Lavapipe, o);
+}
+
+// The demo sheet with a `side`^2 texture of independent random grey texels: detail at
+// the scale of one texel everywhere.
+io::GltfFile noise_asset(uint32_t side, int grid = 4) {
+  io::GltfFile f = pipeline::make_demo_asset({grid, 16});
+  Image img;
+  img.width = img.height = side, img.channels = 3;
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  for (size_t i = 0; i < size_t(side) * side; ++i) {
+    const float v = u(rng);
+    img.pixels.insert(img.pixels.end(), {v, v, v});
+  }
+  f.image_bytes[0] = io::encode_image(img, "png");
+  return f;
+}
+
+}  // namespace
+
+TEST_CASE("render_mesh trilinear: the level of detail is log2 of the texel footprint, blended between levels",
+          "[eval][engine]") {
+  auto cpu = engine::make_cpu_engine({});
+  const Square sq;
+  // A 160-texel texture on a 64-pixel square: 2.5 texels a pixel, lambda = log2 2.5.
+  for (const uint32_t side : {160u, 64u, 32u}) {
+    auto d = sq.desc(64);
+    const uint32_t levels = engine::mip_chain_levels(side, side);
+    const auto tex = lod_chain(side, side, levels);
+    d.texture = tex.data(), d.texture_width = d.texture_height = side, d.mip_levels = levels;
+    const auto r = cpu->render_mesh(d);
+    const double want = std::max(0.0, std::log2(side / 64.0)) / 10;  // magnified: level 0
+    for (size_t p = 0; p < r.pixels.size(); ++p) {
+      REQUIRE(r.coverage[p] != engine::kNoMeshTriangle);
+      REQUIRE(r.pixels[p] == Approx(want).margin(1e-5));
+    }
+  }
+  // Perspective: the square tilted away (w grows with y). The LOD per pixel against
+  // finite differences of the double-precision pixel -> texel map.
+  auto d = sq.desc(96);
+  d.cameras = {{1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 0, 0, 0, 0.6f, 0, 1.7f}};
+  const uint32_t side = 512, levels = engine::mip_chain_levels(side, side);
+  const auto tex = lod_chain(side, side, levels);
+  d.texture = tex.data(), d.texture_width = d.texture_height = side, d.mip_levels = levels;
+  const auto r = cpu->render_mesh(d);
+  // Pixel centre (x, y) -> square point: NDC (X, Y) = (px, py) / (0.6 py + 1.7).
+  auto texel = [&](double x, double y, double out[2]) {
+    const double X = 2 * x / 96 - 1, Y = 1 - 2 * y / 96;
+    const double py = 1.7 * Y / (1 - 0.6 * Y), px = X * (0.6 * py + 1.7);
+    out[0] = (px + 1) / 2 * side, out[1] = (1 - py) / 2 * side;
+  };
+  size_t checked = 0;
+  for (uint32_t j = 8; j < 88; j += 5)
+    for (uint32_t i = 8; i < 88; i += 5) {
+      const size_t p = size_t(j) * 96 + i;
+      if (r.coverage[p] == engine::kNoMeshTriangle) continue;
+      double a[2], b[2], c[2], e[2];
+      const double h = 1e-3;
+      texel(i + 0.5 + h, j + 0.5, a), texel(i + 0.5 - h, j + 0.5, b), texel(i + 0.5, j + 0.5 + h, c),
+          texel(i + 0.5, j + 0.5 - h, e);
+      const double rho = std::max(std::hypot(a[0] - b[0], a[1] - b[1]), std::hypot(c[0] - e[0], c[1] - e[1])) / (2 * h);
+      const double want = std::clamp(std::log2(rho), 0.0, double(levels - 1)) / 10;
+      INFO("pixel " << i << "," << j << " rho " << rho);
+      CHECK(r.pixels[p] == Approx(want).margin(2e-3));
+      ++checked;
+    }
+  CHECK(checked > 100);
+}
+
+TEST_CASE("render_mesh trilinear: single-texel detail minified averages out; bilinear aliases", "[eval][engine]") {
+  auto cpu = engine::make_cpu_engine({});
+  const Square sq;
+  // A 1-texel checkerboard (mean 0.5), 2.5 texels a pixel.
+  const uint32_t side = 160;
+  Image img;
+  img.width = img.height = side, img.channels = 1;
+  for (uint32_t y = 0; y < side; ++y)
+    for (uint32_t x = 0; x < side; ++x) img.pixels.push_back(float((x + y) % 2));
+  std::vector<float> chain;
+  const uint32_t levels = engine::mip_chain_levels(side, side);
+  for (const Image& l : eval::mip_chain(img, levels)) chain.insert(chain.end(), l.pixels.begin(), l.pixels.end());
+  REQUIRE(chain.size() == engine::mip_chain_texels(side, side, levels));
+  auto d = sq.desc(64);
+  d.texture = chain.data(), d.texture_width = d.texture_height = side;
+  auto spread = [](const std::vector<float>& px) {
+    const auto [lo, hi] = std::minmax_element(px.begin(), px.end());
+    return *hi - *lo;
+  };
+  d.mip_levels = 1;
+  const auto bilinear = cpu->render_mesh(d);
+  d.mip_levels = levels;
+  const auto trilinear = cpu->render_mesh(d);
+  CHECK(spread(bilinear.pixels) > 0.2f);  // one sample of 2.5 x 2.5 texels: aliasing
+  // Level 1 of a 1-texel checkerboard is mid-grey in linear light: 0.5 linear is 0.735 sRGB.
+  for (float v : trilinear.pixels) REQUIRE(v == Approx(0.7354).margin(2e-3));
+}
+
+TEST_CASE("render_mesh: Vulkan (lavapipe, validation on) matches the CPU oracle with trilinear filtering",
+          "[eval][engine]") {
+  std::unique_ptr<engine::Engine> vk;
+  try {
+    vk = lavapipe();
+  } catch (const engine::EngineError& e) {
+    UVPRESS_SKIP(std::string("no lavapipe: ") + e.what());
+  }
+  auto cpu = engine::make_cpu_engine({});
+  io::GltfFile file = pipeline::make_demo_asset({16, 256});
+  const io::Asset asset = io::build_asset(file);
+  const Image tex = io::decode_image(file.image_bytes[0], "demo");
+  const auto& p = asset.primitives.at(0);
+  for (bool repeat : {false, true})
+    for (uint32_t channels : {1u, 3u}) {
+      std::vector<float> chain;
+      const uint32_t levels = engine::mip_chain_levels(tex.width, tex.height);
+      for (const Image& l : eval::mip_chain(tex, levels)) {
+        const auto y = perceptual::luminance_plane(l);
+        if (channels == 1) chain.insert(chain.end(), y.begin(), y.end());
+        else chain.insert(chain.end(), l.pixels.begin(), l.pixels.end());
+      }
+      engine::MeshRenderDesc d;
+      d.width = 96, d.height = 104;
+      d.cameras = eval::dodecahedron_cameras(p.positions.data(), p.vertex_count());
+      d.positions = p.positions.data(), d.vertex_count = p.vertex_count();
+      d.indices = p.indices.data(), d.triangle_count = p.triangle_count();
+      d.uvs = p.uv_sets[0].uv.data();
+      d.texture = chain.data(), d.texture_width = tex.width, d.texture_height = tex.height;
+      d.channels = channels, d.mip_levels = levels, d.repeat = repeat;
+      const auto a = cpu->render_mesh(d), b = vk->render_mesh(d);
+      REQUIRE(a.coverage == b.coverage);
+      float worst = 0;
+      for (size_t k = 0; k < a.pixels.size(); ++k) worst = std::max(worst, std::abs(a.pixels[k] - b.pixels[k]));
+      INFO("repeat " << repeat << ", channels " << channels << ": max |cpu - vulkan| = " << worst);
+      // The level of detail goes through log2 on both sides (the GPU's is not correctly
+      // rounded): values agree to the blend weight's rounding.
+      CHECK(worst <= 1e-4f);
+    }
+  CHECK(vk->validation_errors() == 0);
+}
+
+TEST_CASE("render_mesh: a view rendered as 2 x 2 tiles is the whole view; triangles past the guard band are clipped",
+          "[eval][engine]") {
+  auto cpu = engine::make_cpu_engine({});
+  io::GltfFile file = pipeline::make_demo_asset({2, 128});  // 8 large triangles: most cross tile borders
+  const io::Asset asset = io::build_asset(file);
+  const Image tex = io::decode_image(file.image_bytes[0], "demo");
+  const auto y = perceptual::luminance_plane(tex);
+  const auto& p = asset.primitives.at(0);
+  const auto cams = eval::dodecahedron_cameras(p.positions.data(), p.vertex_count());
+  engine::MeshRenderDesc d;
+  d.positions = p.positions.data(), d.vertex_count = p.vertex_count();
+  d.indices = p.indices.data(), d.triangle_count = p.triangle_count();
+  d.uvs = p.uv_sets[0].uv.data();
+  d.texture = y.data(), d.texture_width = tex.width, d.texture_height = tex.height;
+  d.width = d.height = 1024;
+  d.cameras = {cams[0], cams[7]};
+  const auto whole = cpu->render_mesh(d);
+  // 4 x 4 tiles of 256: a triangle spans far more than the guard band (256 px) past a tile.
+  const uint32_t k = 4, T = 256;
+  d.width = d.height = T;
+  d.cameras.clear();
+  for (size_t v : {0, 7})
+    for (uint32_t b = 0; b < k; ++b)
+      for (uint32_t a = 0; a < k; ++a) d.cameras.push_back(eval::tile_camera(cams[v], k, a, b));
+  const auto tiles = cpu->render_mesh(d);
+  size_t same = 0, covered = 0, total = 0;
+  float worst = 0;
+  double sum = 0;
+  for (uint32_t v = 0; v < 2; ++v)
+    for (uint32_t b = 0; b < k; ++b)
+      for (uint32_t a = 0; a < k; ++a)
+        for (uint32_t j = 0; j < T; ++j)
+          for (uint32_t i = 0; i < T; ++i) {
+            const size_t t = ((size_t(v) * k + b) * k + a) * T * T + size_t(j) * T + i;
+            const size_t w = size_t(v) * 1024 * 1024 + (size_t(b) * T + j) * 1024 + size_t(a) * T + i;
+            ++total;
+            covered += whole.coverage[w] != engine::kNoMeshTriangle;
+            if (tiles.coverage[t] != whole.coverage[w]) continue;
+            ++same;
+            worst = std::max(worst, std::abs(tiles.pixels[t] - whole.pixels[w]));
+            sum += std::abs(tiles.pixels[t] - whole.pixels[w]);
+          }
+  INFO(same << " of " << total << " pixels with the same coverage; value difference worst " << worst << ", mean "
+            << sum / double(same));
+  CHECK(covered > total / 4);
+  // Vertices snap to 1/16 pixel in each frame; the tile frames are whole pixels apart, so
+  // only rounding of the shifted matrices can move an edge.
+  CHECK(double(same) >= 0.9995 * double(total));
+  // A clipped piece's planes are solved over the unsnapped vertices (the whole view's over
+  // the snapped ones): texel coordinates differ by a small fraction of a texel.
+  CHECK(worst < 0.01f);
+  CHECK(sum / double(same) < 1e-4);
+}
+
+TEST_CASE("eval: auto resolution resolves single-texel detail that 512-px views minify", "[eval]") {
+  // A 512^2 texture of single-texel noise on the demo sheet: the 512-px views minify it
+  // (1.6 texels a pixel at the median, 3 at the 95th percentile).
+  const io::GltfFile file = noise_asset(512);
+  auto cpu = engine::make_cpu_engine({});
+  eval::EvalOptions o;
+  o.cost_grid = {0.5, 1.0};
+  o.artifacts = false;
+  const auto automatic = eval::evaluate(file, {}, *cpu, o);
+  o.resolution = 512, o.filter = eval::TextureFilter::Bilinear;
+  const auto old = eval::evaluate(file, {}, *cpu, o);
+  auto gap = [](const nlohmann::ordered_json& r) {
+    const auto& c = r["layouts"][0]["curve"];
+    return c[0]["q"].get<double>() - c[1]["q"].get<double>();
+  };
+  INFO("auto: " << automatic["resolution"] << " px, texels per pixel " << automatic["texels_per_pixel"] << ", resolved "
+                << automatic["resolved_fraction"] << ", gap " << gap(automatic) << ", noise floor "
+                << automatic["noise_floor"]);
+  INFO("bilinear 512: texels per pixel " << old["texels_per_pixel"] << ", resolved " << old["resolved_fraction"]
+                                         << ", gap " << gap(old) << ", noise floor " << old["noise_floor"]);
+  CHECK(automatic["resolution_mode"] == "auto");
+  CHECK(old["resolution_mode"] == "fixed");
+  CHECK(automatic["resolution"].get<int>() >= 1024);
+  CHECK(!automatic["resolution_capped"].get<bool>());
+  CHECK(automatic["resolved_fraction"].get<double>() >= 0.95);
+  CHECK(automatic["texels_per_pixel"]["value"].get<double>() <= 1.0);
+  CHECK(old["texels_per_pixel"]["median"].get<double>() > 1.4);  // the old views minify
+  CHECK(old["resolved_fraction"].get<double>() < 0.4);
+  // Halving the texels of single-texel detail is a loss the resolved views see beyond
+  // their noise floor.
+  CHECK(gap(automatic) > 3 * automatic["noise_floor"].get<double>());
+}
+
+TEST_CASE("eval: views larger than the engine's limit are tiled and score like one render", "[eval]") {
+  // At 1280 px (2 x 2 tiles of 640) against 1024 px (one render): same asset, same
+  // texture; q of a resize must be close (views differ only in resolution).
+  const io::GltfFile file = pipeline::make_demo_asset({8, 256});
+  auto cpu = engine::make_cpu_engine({});
+  eval::EvalOptions o;
+  o.cost_grid = {0.25};
+  o.artifacts = false;
+  o.noise_floor = false;
+  o.resolution = 1280;
+  const auto tiled = eval::evaluate(file, {}, *cpu, o);
+  CHECK(tiled["resolution"] == 1280);
+  o.resolution = 1024;
+  const auto one = eval::evaluate(file, {}, *cpu, o);
+  const double a = tiled["layouts"][0]["curve"][0]["q"], b = one["layouts"][0]["curve"][0]["q"];
+  INFO("q at 1280 (tiled) " << a << ", at 1024 " << b);
+  CHECK(a > 0);
+  CHECK(a == Approx(b).epsilon(0.25));
+}
+
+TEST_CASE("eval: on every shared asset the input curve never rises with c_r beyond the noise floor", "[eval][shared]") {
+  const auto dir = test::shared_dir();
+  if (!dir) UVPRESS_SKIP("no ../shared: the shared assets are not here");
+  auto cpu = engine::make_cpu_engine({});
+  size_t assets = 0;
+  for (const char* rel : {"Duck/glTF-Binary/Duck.glb", "Fox/glTF/Fox.gltf", "CesiumMilkTruck/glTF/CesiumMilkTruck.gltf",
+                          "MultiUVTest/glTF/MultiUVTest.gltf"}) {
+    const auto path = *dir / "assets" / rel;
+    if (!std::filesystem::exists(path)) {
+      WARN("skipped " << path << ": not found");
+      continue;
+    }
+    const io::GltfFile file = io::load_gltf(path.string());
+    eval::EvalOptions o;  // the defaults users run: auto resolution, trilinear, the full grid
+    o.artifacts = false;
+    const auto r = eval::evaluate(file, {}, *cpu, o);
+    const double floor = r["noise_floor"];
+    const auto& c = r["layouts"][0]["curve"];
+    INFO(rel << ": " << r["resolution"] << " px, resolved " << r["resolved_fraction"] << ", noise floor " << floor);
+    CHECK((r["resolved_fraction"].get<double>() >= 0.95 || r["resolution_capped"].get<bool>()));
+    for (size_t k = 1; k < c.size(); ++k) {
+      const double prev = c[k - 1]["q"], q = c[k]["q"];
+      INFO("c_r " << c[k - 1]["c_r"] << " -> " << c[k]["c_r"] << ": q " << prev << " -> " << q);
+      CHECK(q <= prev + floor);
+    }
+    ++assets;
+  }
+  CHECK(assets > 0);
+}
