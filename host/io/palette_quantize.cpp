@@ -7,19 +7,28 @@
 
 namespace uvpress::io {
 
+namespace {
+
+struct Free {
+  void operator()(liq_attr* p) const { liq_attr_destroy(p); }
+  void operator()(liq_image* p) const { liq_image_destroy(p); }
+  void operator()(liq_result* p) const { liq_result_destroy(p); }
+};
+
+}  // namespace
+
 PaletteImage quantize_palette(const uint8_t* rgba, uint32_t width, uint32_t height, float dithering) {
-  std::unique_ptr<liq_attr, decltype(&liq_attr_destroy)> attr(liq_attr_create(), &liq_attr_destroy);
+  std::unique_ptr<liq_attr, Free> attr(liq_attr_create());
   if (!attr) throw std::runtime_error("libimagequant: out of memory");
   liq_set_max_colors(attr.get(), 256);
   // Speed 1 (the slowest, best palette): textures are few and a palette is chosen once.
   liq_set_speed(attr.get(), 1);
   // Gamma 0: libimagequant's default (sRGB-like), which is how colour textures are stored.
-  std::unique_ptr<liq_image, decltype(&liq_image_destroy)> image(
-      liq_image_create_rgba(attr.get(), rgba, int(width), int(height), 0), &liq_image_destroy);
+  std::unique_ptr<liq_image, Free> image(liq_image_create_rgba(attr.get(), rgba, int(width), int(height), 0));
   if (!image) throw std::runtime_error("libimagequant: cannot take a " + std::to_string(width) + "x" + std::to_string(height) + " image");
   liq_result* raw = nullptr;
   if (liq_image_quantize(image.get(), attr.get(), &raw) != LIQ_OK || !raw) throw std::runtime_error("libimagequant: quantization failed");
-  std::unique_ptr<liq_result, decltype(&liq_result_destroy)> result(raw, &liq_result_destroy);
+  std::unique_ptr<liq_result, Free> result(raw);
   liq_set_dithering_level(result.get(), dithering);
   PaletteImage out;
   out.indices.resize(size_t(width) * height);
