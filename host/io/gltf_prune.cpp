@@ -161,8 +161,11 @@ std::vector<int> renumbering(const std::vector<bool>& keep) {
 template <typename T>
 void erase_unkept(std::vector<T>& objects, const std::vector<bool>& keep) {
   size_t out = 0;
-  for (size_t i = 0; i < objects.size(); ++i)
-    if (keep[i]) objects[out++] = std::move(objects[i]);
+  for (size_t i = 0; i < objects.size(); ++i) {
+    if (!keep[i]) continue;
+    if (out != i) objects[out] = std::move(objects[i]);  // never onto itself: that empties its vectors
+    ++out;
+  }
   objects.resize(out);
 }
 
