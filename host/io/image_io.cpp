@@ -187,21 +187,6 @@ EncodeSettings encode_settings_of(const std::vector<uint8_t>& bytes) {
   if (format == "png") {
     // IHDR's colour type (byte 25 of the file): 3 is indexed colour.
     s.palette = bytes.size() >= 26 && std::memcmp(&bytes[12], "IHDR", 4) == 0 && bytes[25] == 3;
-    // The palette's size (PLTE holds 3 bytes a colour): the author accepted that many
-    // colours, and a re-baked image quantized to as many (rounded up to a power of two)
-    // compresses as the input did (Duck: 54 colours; its half-texel resize at 256 colours
-    // 17.6 KB, at 64 colours 12.7 KB, mean error 0.0003).
-    for (size_t at = 8; s.palette && at + 8 <= bytes.size();) {
-      const size_t length = size_t(bytes[at]) << 24 | size_t(bytes[at + 1]) << 16 | size_t(bytes[at + 2]) << 8 | bytes[at + 3];
-      if (std::memcmp(&bytes[at + 4], "PLTE", 4) == 0) {
-        int colours = 2;
-        while (colours < 256 && size_t(colours) < length / 3) colours *= 2;
-        s.palette_colours = colours;
-        break;
-      }
-      if (std::memcmp(&bytes[at + 4], "IDAT", 4) == 0 || length > bytes.size()) break;
-      at += 12 + length;
-    }
   } else if (format == "jpeg") {
     const JpegHeader h = read_jpeg_header(bytes.data(), bytes.size());
     s.format = "jpeg";
@@ -216,7 +201,7 @@ EncodeSettings encode_settings_of(const std::vector<uint8_t>& bytes) {
 }
 
 std::string describe(const EncodeSettings& s) {
-  if (s.format == "png") return s.palette ? "png (palette, at most " + std::to_string(s.palette_colours) + " colours)" : "png";
+  if (s.format == "png") return s.palette ? "png (8-bit palette)" : "png";
   const char* sub = s.jpeg_h_sampling == 2 && s.jpeg_v_sampling == 2   ? "4:2:0"
                     : s.jpeg_h_sampling == 2 && s.jpeg_v_sampling == 1 ? "4:2:2"
                     : s.jpeg_h_sampling == 1 && s.jpeg_v_sampling == 1 ? "4:4:4"
@@ -231,7 +216,6 @@ std::vector<uint8_t> encode_image(const Image& image, const EncodeSettings& sett
   if (settings.format == "png") {
     PngOptions o;
     o.palette = settings.palette;
-    o.max_colours = settings.palette_colours;
     return encode_png(image, o);
   }
   if (settings.format != "jpeg") throw std::invalid_argument("encode_image: format must be png or jpeg");

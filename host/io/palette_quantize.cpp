@@ -2,7 +2,6 @@
 
 #include <libimagequant.h>
 
-#include <algorithm>
 #include <memory>
 #include <stdexcept>
 
@@ -18,10 +17,10 @@ struct Free {
 
 }  // namespace
 
-PaletteImage quantize_palette(const uint8_t* rgba, uint32_t width, uint32_t height, float dithering, int max_colours) {
+PaletteImage quantize_palette(const uint8_t* rgba, uint32_t width, uint32_t height, float dithering) {
   std::unique_ptr<liq_attr, Free> attr(liq_attr_create());
   if (!attr) throw std::runtime_error("libimagequant: out of memory");
-  liq_set_max_colors(attr.get(), std::clamp(max_colours, 2, 256));
+  liq_set_max_colors(attr.get(), 256);
   // Speed 1 (the slowest, best palette): textures are few and a palette is chosen once.
   liq_set_speed(attr.get(), 1);
   // Gamma 0: libimagequant's default (sRGB-like), which is how colour textures are stored.

@@ -16,9 +16,8 @@ struct PaletteImage {
   std::vector<uint8_t> indices;                 // one per texel, row-major
 };
 
-// `rgba`: width * height * 4 bytes (straight alpha). At most `max_colours` (2..256)
-// colours, Floyd-Steinberg dithering at `dithering` (0: none, 1: full). Throws
-// std::runtime_error when libimagequant fails.
-PaletteImage quantize_palette(const uint8_t* rgba, uint32_t width, uint32_t height, float dithering, int max_colours = 256);
+// `rgba`: width * height * 4 bytes (straight alpha). Floyd-Steinberg dithering at
+// `dithering` (0: none, 1: full). Throws std::runtime_error when libimagequant fails.
+PaletteImage quantize_palette(const uint8_t* rgba, uint32_t width, uint32_t height, float dithering);
 
 }  // namespace uvpress::io

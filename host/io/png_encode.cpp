@@ -81,7 +81,7 @@ bool opaque(const Image& img) {
   return true;
 }
 
-Rows palette_rows(const Image& img, bool keep_alpha, float dithering, int max_colours) {
+Rows palette_rows(const Image& img, bool keep_alpha, float dithering) {
   const size_t n = size_t(img.width) * img.height;
   std::vector<uint8_t> rgba(n * 4);
   auto to8 = [](float v) { return uint8_t(std::lround(std::clamp(v, 0.0f, 1.0f) * 255.0f)); };
@@ -91,7 +91,7 @@ Rows palette_rows(const Image& img, bool keep_alpha, float dithering, int max_co
     for (int c = 0; c < 3; ++c) rgba[4 * i + size_t(c)] = to8(grey ? p[0] : p[c]);
     rgba[4 * i + 3] = keep_alpha ? to8(p[img.channels - 1]) : 255;
   }
-  PaletteImage q = quantize_palette(rgba.data(), img.width, img.height, dithering, max_colours);
+  PaletteImage q = quantize_palette(rgba.data(), img.width, img.height, dithering);
   // Translucent entries first, so that tRNS lists only them.
   std::vector<uint8_t> order(q.palette.size());
   for (size_t i = 0; i < order.size(); ++i) order[i] = uint8_t(i);
@@ -146,7 +146,7 @@ std::vector<uint8_t> encode_png(const Image& image, const PngOptions& options) {
     throw std::invalid_argument("encode_png: inconsistent image");
   const bool keep_alpha = !opaque(image);
   const bool palette = options.palette && image.bits != 16;
-  const Rows rows = palette ? palette_rows(image, keep_alpha, options.dithering, options.max_colours) : direct_rows(image, keep_alpha);
+  const Rows rows = palette ? palette_rows(image, keep_alpha, options.dithering) : direct_rows(image, keep_alpha);
   // libpng's adaptive choice per row (minimum sum of absolute differences) is a heuristic:
   // on smooth colour it wins, on palettes and flat areas no filter often does. Try both,
   // and Paeth alone, and keep the smallest.

@@ -16,7 +16,6 @@ struct PngOptions {
   // were paletted; ignored for 16-bit images.
   bool palette = false;
   float dithering = 1.0f;  // Floyd-Steinberg strength for the palette (libimagequant's default)
-  int max_colours = 256;   // palette size at most (2..256)
 };
 
 // Stored values as they are (no colour conversion). An alpha channel whose every texel is

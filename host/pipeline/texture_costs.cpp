@@ -24,8 +24,7 @@ json image_costs(const io::GltfFile& file) {
       const io::ImageHeader h = io::read_image_header(b, file.path);
       const TextureCost c = texture_cost(h.width, h.height);
       t["size"] = {h.width, h.height};
-      const json costs = cost_json(c, b.size());
-      for (auto& [key, value] : costs.items()) t[key] = value;
+      for (auto& [key, value] : cost_json(c, b.size()).items()) t[key] = value;
       total.texels += c.texels, total.vram_rgba8 += c.vram_rgba8, total.vram_bc7 += c.vram_bc7;
     } else {
       t["bytes"] = b.size();  // carried as it is; its texels are not read

@@ -88,7 +88,7 @@ TEST_CASE("CLI: copy writes a valid .glb and .gltf", "[cli][shared]") {
   test::Scratch dir("cli-copy");
   const auto folder = *shared / "assets/CesiumMilkTruck/glTF";
   // The whole asset: JSON, .bin and the PNG, not the .gltf text alone.
-  const uint64_t whole = fs::file_size(folder / "CesiumMilkTruck.gltf") + fs::file_size(folder / "CesiumMilkTruck0.bin") +
+  const uint64_t whole = fs::file_size(folder / "CesiumMilkTruck.gltf") + fs::file_size(folder / "CesiumMilkTruck.bin") +
                          fs::file_size(folder / "CesiumMilkTruck.png");
   for (const char* name : {"truck.glb", "truck.gltf"}) {
     const auto report_path = dir / (std::string(name) + ".json");
