@@ -15,7 +15,7 @@ packages=(
   libvulkan-dev mesa-vulkan-drivers vulkan-validationlayers vulkan-tools glslang-tools spirv-tools
   libeigen3-dev libsuitesparse-dev libopenblas-dev
   libtinygltf-dev nlohmann-json3-dev libstb-dev
-  libopenimageio-dev openimageio-tools
+  libopenimageio-dev openimageio-tools libpng-dev libjpeg62-turbo-dev libimagequant-dev
   catch2 libcli11-dev libnlopt-cxx-dev
   gnuplot-nox chromium
   slurmctld slurmd slurm-client munge

@@ -1,6 +1,9 @@
 #include "io/image_io.h"
 
 #include "core/error.h"
+#include "io/jpeg_encode.h"
+#include "io/jpeg_header.h"
+#include "io/png_encode.h"
 
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
@@ -178,25 +181,56 @@ Image decode_image(const std::vector<uint8_t>& bytes, const std::string& name) {
   return image;
 }
 
-std::vector<uint8_t> encode_image(const Image& image, const std::string& format) {
+EncodeSettings encode_settings_of(const std::vector<uint8_t>& bytes) {
+  EncodeSettings s;
+  const std::string format = sniff_image_format(bytes.data(), bytes.size());
+  if (format == "png") {
+    // IHDR's colour type (byte 25 of the file): 3 is indexed colour.
+    s.palette = bytes.size() >= 26 && std::memcmp(&bytes[12], "IHDR", 4) == 0 && bytes[25] == 3;
+  } else if (format == "jpeg") {
+    const JpegHeader h = read_jpeg_header(bytes.data(), bytes.size());
+    s.format = "jpeg";
+    if (h.valid) {
+      if (h.quality > 0) s.jpeg_quality = h.quality;
+      s.jpeg_h_sampling = h.components >= 3 ? h.h_sampling : 1;
+      s.jpeg_v_sampling = h.components >= 3 ? h.v_sampling : 1;
+      s.progressive = h.progressive;
+    }
+  }
+  return s;
+}
+
+std::string describe(const EncodeSettings& s) {
+  if (s.format == "png") return s.palette ? "png (8-bit palette)" : "png";
+  const char* sub = s.jpeg_h_sampling == 2 && s.jpeg_v_sampling == 2   ? "4:2:0"
+                    : s.jpeg_h_sampling == 2 && s.jpeg_v_sampling == 1 ? "4:2:2"
+                    : s.jpeg_h_sampling == 1 && s.jpeg_v_sampling == 1 ? "4:4:4"
+                                                                       : "other";
+  return "jpeg (quality " + std::to_string(s.jpeg_quality) + ", " + sub + (s.progressive ? ", progressive)" : ")");
+}
+
+std::vector<uint8_t> encode_image(const Image& image, const EncodeSettings& settings) {
   if (image.width == 0 || image.height == 0 || image.channels == 0 || image.channels > 4 ||
       image.pixels.size() != size_t(image.width) * image.height * image.channels)
     throw std::invalid_argument("encode_image: inconsistent image");
-  std::vector<uint8_t> out;
-  oiio::Filesystem::IOVecOutput proxy(out);
-  const bool png = format == "png";
-  if (!png && format != "jpeg") throw std::invalid_argument("encode_image: format must be png or jpeg");
-  auto writer = oiio::ImageOutput::create(png ? "memory.png" : "memory.jpg", &proxy);
-  if (!writer) throw std::runtime_error("OpenImageIO has no " + format + " writer: " + oiio::geterror());
-  oiio::TypeDesc type = (png && image.bits == 16) ? oiio::TypeDesc::UINT16 : oiio::TypeDesc::UINT8;
-  oiio::ImageSpec spec(int(image.width), int(image.height), int(image.channels), type);
-  if (!png) spec.attribute("Compression", "jpeg:95");
-  // Keep stored values as they are: no colour-space conversion, no premultiplication.
-  spec.attribute("oiio:UnassociatedAlpha", 1);
-  if (!writer->open("memory", spec) ||
-      !writer->write_image(oiio::TypeDesc::FLOAT, image.pixels.data()) || !writer->close())
-    throw std::runtime_error("encoding " + format + " failed: " + writer->geterror());
-  return out;
+  if (settings.format == "png") {
+    PngOptions o;
+    o.palette = settings.palette;
+    return encode_png(image, o);
+  }
+  if (settings.format != "jpeg") throw std::invalid_argument("encode_image: format must be png or jpeg");
+  JpegOptions o;
+  o.quality = settings.jpeg_quality;
+  o.h_sampling = settings.jpeg_h_sampling, o.v_sampling = settings.jpeg_v_sampling;
+  o.progressive = settings.progressive;
+  return encode_jpeg(image, o);
+}
+
+std::vector<uint8_t> encode_image(const Image& image, const std::string& format) {
+  if (format != "png" && format != "jpeg") throw std::invalid_argument("encode_image: format must be png or jpeg");
+  EncodeSettings s;
+  s.format = format;
+  return encode_image(image, s);
 }
 
 }  // namespace uvpress::io

@@ -33,7 +33,27 @@ ImageHeader read_image_header(const std::vector<uint8_t>& bytes, const std::stri
 void check_image(const std::vector<uint8_t>& bytes, const std::string& mime_type, const std::string& name);
 Image decode_image(const std::vector<uint8_t>& bytes, const std::string& name);
 
-// Encodes as "png" (8 or 16 bit, as image.bits says) or "jpeg" (8 bit, quality 95).
+// How a texture is written: the input's codec and the choices its encoder made, so that a
+// re-baked texture costs what its author accepted (issue 18).
+struct EncodeSettings {
+  std::string format = "png";  // "png" | "jpeg"
+  bool palette = false;        // PNG: an 8-bit palette (the input was paletted)
+  int jpeg_quality = 95;       // JPEG: IJG quality, estimated from the input's tables
+  int jpeg_h_sampling = 2, jpeg_v_sampling = 2;  // JPEG: luma sampling factors (2, 2: 4:2:0)
+  bool progressive = false;    // JPEG: progressive when the input was
+};
+
+// The settings that reproduce `bytes`' encoding: PNG (paletted or not) or JPEG (quality
+// from its quantization tables, subsampling, progressive). Anything else: plain PNG.
+EncodeSettings encode_settings_of(const std::vector<uint8_t>& bytes);
+// In words, for reports: "png (8-bit palette)", "jpeg (quality 87, 4:2:0, progressive)".
+std::string describe(const EncodeSettings& settings);
+
+// PNG: 8 or 16 bit as image.bits says, zlib at its strongest, the smallest of a few row
+// filter choices, no alpha channel when every texel is opaque, quantized to a palette when
+// settings.palette (io/png_encode.h). JPEG: libjpeg at the settings (io/jpeg_encode.h).
+std::vector<uint8_t> encode_image(const Image& image, const EncodeSettings& settings);
+// The same with default settings for `format` ("png": not paletted; "jpeg": quality 95, 4:2:0).
 std::vector<uint8_t> encode_image(const Image& image, const std::string& format);
 
 }  // namespace uvpress::io

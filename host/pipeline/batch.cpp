@@ -1,6 +1,7 @@
 #include "pipeline/batch.h"
 
 #include "core/error.h"
+#include "io/asset_bytes.h"
 #include "io/atomic_file.h"
 #include "io/gltf_io.h"
 
@@ -252,13 +253,12 @@ json process_asset(const BatchItem& item, const BatchOptions& o, engine::Engine*
                  {"input_hash", hash_asset(item.input, o.refs)}, {"options", options_json(o)}};
   try {
     if (!engine) throw engine::EngineError(engine_error.empty() ? "no engine" : engine_error);
-    std::error_code ec;
-    report["input_bytes"] = fs::file_size(item.input, ec);
     io::GltfFile file = io::load_gltf(item.input, o.refs);
+    report["input_bytes"] = io::asset_bytes(item.input, o.refs).total();  // JSON, buffers and images
     auto r = reparam(file, *engine, o.reparam);
     io::save_gltf(file, out.string());
     report["output"] = out.string();
-    report["output_bytes"] = fs::file_size(out, ec);
+    report["output_bytes"] = io::asset_bytes(out.string()).total();
     report["output_hash"] = hash_asset(out.string());
     report["device"] = r["device"];
     report["backend"] = r["backend"];

@@ -10,14 +10,17 @@
 #include "core/disjoint_sets.h"
 #include "core/error.h"
 #include "core/quantile.h"
+#include "core/texture_cost.h"
 #include "eval/eval.h"
 #include "eval/resize.h"
 #include "io/asset.h"
 #include "io/gltf_append.h"
+#include "io/gltf_prune.h"
 #include "io/image_io.h"
 #include "perceptual/mesh_stage.h"
 #include "perceptual/outline_fit.h"
 #include "pipeline/injective_fit.h"
+#include "pipeline/texture_costs.h"
 #include "perceptual/triangle_view.h"
 
 #include <algorithm>
@@ -34,6 +37,7 @@ using json = nlohmann::ordered_json;
 namespace {
 
 using Clock = std::chrono::steady_clock;
+
 double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
 // One UV set of one primitive: TEXCOORD_n of asset.primitives[primitive].
@@ -141,11 +145,6 @@ struct Chart {
 
 double signed_area(const double* a, const double* b, const double* c) {
   return 0.5 * ((b[0] - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (b[1] - a[1]));
-}
-
-std::string format_of(const std::vector<uint8_t>& bytes) {
-  std::string f = io::sniff_image_format(bytes.data(), bytes.size());
-  return f == "jpeg" ? "jpeg" : "png";
 }
 
 bool has_tangents(const tinygltf::Model& m, const io::Primitive& p) {
@@ -543,7 +542,9 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
       }
       exact_texels += copied;
       const std::vector<uint8_t> old_bytes = file.image_bytes[size_t(i)];
-      file.image_bytes[size_t(i)] = io::encode_image(baked, format_of(old_bytes));
+      // Written as the input was (its codec, palette, JPEG quality and subsampling): a
+      // re-baked texture costs what its author accepted for it.
+      file.image_bytes[size_t(i)] = io::encode_image(baked, io::encode_settings_of(old_bytes));
       out.old_texels += double(source.width) * source.height;
       out.new_texels += double(baked.width) * baked.height;
       out.textures.push_back({{"image", i},
@@ -607,7 +608,7 @@ void resize_images(io::GltfFile& file, const std::vector<std::pair<int, std::arr
     Image img = io::decode_image(file.image_bytes[size_t(i)], name);
     if (img.width == size[0] && img.height == size[1]) continue;
     Image small = eval::resize_lanczos3(img, size[0], size[1], false);
-    file.image_bytes[size_t(i)] = io::encode_image(small, format_of(file.image_bytes[size_t(i)]));
+    file.image_bytes[size_t(i)] = io::encode_image(small, io::encode_settings_of(file.image_bytes[size_t(i)]));
   }
 }
 
@@ -931,8 +932,8 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
       const uint32_t w = std::max(1u, uint32_t(std::lround(img.width * ratio)));
       const uint32_t h = std::max(1u, uint32_t(std::lround(img.height * ratio)));
       if (w != img.width || h != img.height) {
-        const std::string format = format_of(file.image_bytes[size_t(i)]);
-        file.image_bytes[size_t(i)] = io::encode_image(eval::resize_area(img, w, h), format);
+        file.image_bytes[size_t(i)] =
+            io::encode_image(eval::resize_area(img, w, h), io::encode_settings_of(original.image_bytes[size_t(i)]));
       }
       t["new_size"] = {w, h};
       t["new_bytes"] = file.image_bytes[size_t(i)].size();
@@ -940,6 +941,51 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
     }
     report["max_gmsd"] = {{"bound", o.max_gmsd}, {"met", met}, {"c_r", chosen_c}, {"q", chosen_q}, {"scale", ratio}};
     stages["max_gmsd_eval"] = seconds_since(t0);
+  }
+
+  // What each texture costs as written (texels, encoded bytes, VRAM) against the input's,
+  // and against the input resized (Lanczos-3) to the same size and encoded the same way:
+  // the bytes a user's resize would have cost for those texels.
+  {
+    auto t0 = Clock::now();
+    TextureCost old_total, new_total;
+    uint64_t old_bytes = 0, new_bytes = 0, resize_bytes = 0;
+    for (auto& t : chosen.textures) {
+      const size_t i = t["image"].get<size_t>();
+      const std::vector<uint8_t>& before = original.image_bytes[i];
+      const std::vector<uint8_t>& after = file.image_bytes[i];
+      const io::ImageHeader hb = io::read_image_header(before, file.path), ha = io::read_image_header(after, file.path);
+      const io::EncodeSettings settings = io::encode_settings_of(before);
+      const Image source = io::decode_image(before, file.path);
+      const Image resized = ha.width == hb.width && ha.height == hb.height
+                                ? source
+                                : eval::resize_lanczos3(source, ha.width, ha.height, false);
+      const size_t resize = io::encode_image(resized, settings).size();
+      const TextureCost cb = texture_cost(hb.width, hb.height), ca = texture_cost(ha.width, ha.height);
+      t["new_size"] = {ha.width, ha.height};  // the resize's when the guard wrote it
+      t["new_bytes"] = after.size();
+      t["encoding"] = io::describe(settings);
+      t["old"] = cost_json(cb, before.size());
+      t["new"] = cost_json(ca, after.size());
+      t["resize_bytes"] = resize;
+      t["bytes_ratio"] = double(after.size()) / double(std::max<size_t>(1, before.size()));
+      t["bytes_vs_resize"] = double(after.size()) / double(std::max<size_t>(1, resize));
+      old_total.texels += cb.texels, old_total.vram_rgba8 += cb.vram_rgba8, old_total.vram_bc7 += cb.vram_bc7;
+      new_total.texels += ca.texels, new_total.vram_rgba8 += ca.vram_rgba8, new_total.vram_bc7 += ca.vram_bc7;
+      old_bytes += before.size(), new_bytes += after.size(), resize_bytes += resize;
+    }
+    report["texture_totals"] = {{"old", cost_json(old_total, old_bytes)},
+                                {"new", cost_json(new_total, new_bytes)},
+                                {"resize_bytes", resize_bytes}};
+    stages["texture_costs"] = seconds_since(t0);
+  }
+  // Nothing the replacement left unreferenced is written (the old UV accessors, their
+  // bufferViews, the old image bytes); what the input itself left unused stays.
+  const io::PruneResult pruned = io::prune_replaced(file, original.model);
+  report["pruned"] = {{"accessors", pruned.accessors}, {"buffer_views", pruned.buffer_views}, {"buffer_bytes", pruned.buffer_bytes}};
+  if (!pruned.skipped.empty()) {
+    report["pruned"]["skipped"] = pruned.skipped;
+    warnings.push_back("unreferenced accessors and bufferViews kept: " + pruned.skipped);
   }
 
   stages["triangle_stage"] = t_triangle;

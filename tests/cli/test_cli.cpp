@@ -12,6 +12,7 @@
 
 using namespace uvpress;
 using test::run_uvpress;
+namespace fs = std::filesystem;
 
 namespace {
 
@@ -85,13 +86,37 @@ TEST_CASE("CLI: copy writes a valid .glb and .gltf", "[cli][shared]") {
   auto shared = test::shared_dir();
   if (!shared) UVPRESS_SKIP("../shared is absent");
   test::Scratch dir("cli-copy");
+  const auto folder = *shared / "assets/CesiumMilkTruck/glTF";
+  // The whole asset: JSON, .bin and the PNG, not the .gltf text alone.
+  const uint64_t whole = fs::file_size(folder / "CesiumMilkTruck.gltf") + fs::file_size(folder / "CesiumMilkTruck.bin") +
+                         fs::file_size(folder / "CesiumMilkTruck.png");
   for (const char* name : {"truck.glb", "truck.gltf"}) {
-    auto r = run_uvpress("copy " + quoted(*shared / "assets/CesiumMilkTruck/glTF/CesiumMilkTruck.gltf") + " -o " +
-                         quoted(dir / name));
+    const auto report_path = dir / (std::string(name) + ".json");
+    auto r = run_uvpress("copy " + quoted(folder / "CesiumMilkTruck.gltf") + " -o " + quoted(dir / name) + " --report " +
+                         quoted(report_path));
     INFO(r.err);
     REQUIRE(r.exit_code == 0);
     CHECK(r.err.empty());  // quiet by default
     CHECK(test::validate_gltf(dir / name)["numErrors"] == 0);
+    std::ifstream in(report_path);
+    const auto report = nlohmann::json::parse(in);
+    CHECK(report["input_bytes"].get<uint64_t>() == whole);
+    uint64_t written = 0;  // the .glb, or the .gltf with its .bin and image beside it
+    for (const auto& e : fs::directory_iterator(dir.path())) {
+      const std::string file = e.path().filename().string(), ext = e.path().extension().string();
+      if (std::string(name) == "truck.glb" ? file == "truck.glb" : (file.rfind("truck", 0) == 0 && ext != ".glb" && ext != ".json"))
+        written += fs::file_size(e.path());
+    }
+    CHECK(report["output_bytes"].get<uint64_t>() == written);
+    // Per texture and in total: texels, bytes, VRAM with mips (RGBA8: 4 bytes a texel over
+    // 2048^2 .. 1^2; BC7: 16-byte 4x4 blocks, the 2x2 and 1x1 levels a block each).
+    REQUIRE(report["textures"].size() == 1);
+    const auto& t = report["textures"][0];
+    CHECK(t["texels"] == 2048u * 2048u);
+    CHECK(t["bytes"].get<uint64_t>() == fs::file_size(folder / "CesiumMilkTruck.png"));
+    CHECK(t["vram_rgba8_mips"] == 22369620u);
+    CHECK(t["vram_bc7_mips"] == 5592432u);
+    CHECK(report["texture_totals"]["bytes"] == t["bytes"]);
   }
 }
 
@@ -165,6 +190,19 @@ TEST_CASE("CLI: reparam's summary line says when the density cap kept it under -
   CHECK(ts["feasible"].get<size_t>() + ts["infeasible"].get<size_t>() == ts["triangles"].get<size_t>());
   CHECK(ts["evaluations"] == 12);
   CHECK(ts["early_stop"] == false);
+  // Bytes: the whole asset before and after, per texture and in total with VRAM.
+  CHECK(report["input_bytes"].get<uint64_t>() == fs::file_size(dir / "demo.glb"));
+  CHECK(report["output_bytes"].get<uint64_t>() == fs::file_size(dir / "out.glb"));
+  REQUIRE(report["textures"].size() == 1);
+  const auto& t = report["textures"][0];
+  CHECK(t["old"]["texels"] == 128u * 128u);
+  CHECK(t["new"]["texels"].get<uint64_t>() == t["new_size"][0].get<uint64_t>() * t["new_size"][1].get<uint64_t>());
+  CHECK(t["new"]["bytes"] == t["new_bytes"]);
+  CHECK(t["new"]["vram_rgba8_mips"].get<uint64_t>() > 4 * t["new"]["texels"].get<uint64_t>());
+  CHECK(t["new"]["vram_bc7_mips"].get<uint64_t>() >= t["new"]["texels"].get<uint64_t>());
+  CHECK(t["resize_bytes"].get<uint64_t>() > 0);
+  CHECK(report["texture_totals"]["new"]["bytes"] == t["new_bytes"]);
+  CHECK_THAT(r.out, Catch::Contains("textures ") && Catch::Contains("VRAM (BC7, mips)"));
   // Without optimization the repacked layout reaches the budget: no cap to explain.
   auto k = run_uvpress("reparam " + quoted(dir / "demo.glb") + " -o " + quoted(dir / "keep.glb") + " --cost 0.3 --no-optimize");
   REQUIRE(k.exit_code == 0);

@@ -256,8 +256,9 @@ nlohmann::json write_resize(const fs::path& input_glb, const fs::path& output_gl
     const uint32_t w = std::max(1u, uint32_t(std::lround(std::sqrt(texels * hin.width / hin.height))));
     const uint32_t h = std::max(1u, uint32_t(std::lround(texels / w)));
     const Image img = io::decode_image(in.image_bytes[i], "input image " + std::to_string(i));
-    const std::string format = io::sniff_image_format(in.image_bytes[i].data(), in.image_bytes[i].size()) == "jpeg" ? "jpeg" : "png";
-    in.image_bytes[i] = io::encode_image(eval::resize_lanczos3(img, w, h, false), format);
+    // Encoded as reparam writes its textures: the input's codec and settings (a palette for
+    // a paletted PNG), so that both sides carry the same encoder's loss.
+    in.image_bytes[i] = io::encode_image(eval::resize_lanczos3(img, w, h, false), io::encode_settings_of(in.image_bytes[i]));
     resized.push_back({{"image", i}, {"from", {hin.width, hin.height}}, {"to", {w, h}}, {"output", {hout.width, hout.height}}});
   }
   io::save_gltf(in, resize_glb.string());

@@ -16,6 +16,7 @@
 #include <random>
 
 using namespace uvpress;
+namespace fs = std::filesystem;
 
 namespace {
 
@@ -227,4 +228,48 @@ TEST_CASE("reparam --no-optimize at cost 1: charts that fit at scale 1 keep thei
   io::GltfFile resampled = in;
   pipeline::reparam(resampled, *engine, o);
   CHECK(eval::score_as_written(in, resampled, *engine, eo).q > 1e-4);
+}
+
+TEST_CASE("reparam prunes what it replaced: no new UNUSED_OBJECT or error, and a reparam of its output does not grow",
+          "[pipeline][reparam][shared][prune]") {
+  if (!test::shared_dir()) UVPRESS_SKIP("../shared is absent");
+  auto engine = engine::make_cpu_engine({});
+  test::Scratch dir("reparam-prune");
+  const auto input = *test::shared_dir() / "assets" / "Duck" / "glTF-Binary" / "Duck.glb";
+  // reparam's layout written (not the guard's resize), so that UVs are replaced too.
+  pipeline::ReparamOptions o = keep_shapes(0.5);
+  o.guard = false;
+  auto run = [&](const fs::path& from, const fs::path& to) {
+    io::GltfFile f = io::load_gltf(from.string());
+    auto report = pipeline::reparam(f, *engine, o);
+    CHECK(report["chosen"] == "reparam");
+    io::save_gltf(f, to.string());
+    return f;
+  };
+  // The bytes that are not images: JSON, geometry, UVs (and any leftovers).
+  auto non_image = [](const fs::path& glb, const io::GltfFile& f) {
+    uint64_t images = 0;
+    for (const auto& b : f.image_bytes) images += b.size();
+    return int64_t(fs::file_size(glb)) - int64_t(images);
+  };
+  const io::GltfFile first = run(input, dir / "once.glb");
+  const io::GltfFile second = run(dir / "once.glb", dir / "twice.glb");
+  const auto v_in = test::validate_gltf(input), v_once = test::validate_gltf(dir / "once.glb"),
+             v_twice = test::validate_gltf(dir / "twice.glb");
+  for (const auto* v : {&v_once, &v_twice}) {
+    INFO((*v).dump());
+    CHECK((*v)["numErrors"].get<int>() <= v_in["numErrors"].get<int>());
+    for (auto& [code, count] : (*v)["errors"].items()) CHECK(count.get<int>() <= v_in["errors"].value(code, 0));
+    CHECK((*v)["codes"].value("UNUSED_OBJECT", 0) <= v_in["codes"].value("UNUSED_OBJECT", 0));
+  }
+  // Geometry and UVs weigh the same after one reparam and after two (16-byte alignment of
+  // the image chunks aside); only the image bytes may change. The old file grew by every
+  // replaced image and UV set (Duck: 117.7 KB -> 151.7 KB at cost 0.5).
+  const int64_t once = non_image(dir / "once.glb", first), twice = non_image(dir / "twice.glb", second);
+  INFO("non-image bytes: once " << once << ", twice " << twice);
+  CHECK(std::abs(once - twice) <= 32);
+  CHECK(fs::file_size(dir / "twice.glb") <= fs::file_size(dir / "once.glb"));
+  // The input's own non-image bytes plus at most the UVs as floats (Duck's are floats).
+  io::GltfFile in = io::load_gltf(input.string());
+  CHECK(once <= non_image(input, in) + 64);
 }

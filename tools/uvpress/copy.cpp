@@ -4,7 +4,9 @@
 
 #include "core/error.h"
 #include "io/asset.h"
+#include "io/asset_bytes.h"
 #include "io/gltf_io.h"
+#include "pipeline/texture_costs.h"
 
 #include <cstdio>
 #include <filesystem>
@@ -27,10 +29,15 @@ void add_copy(CLI::App& app, Globals& g) {
       g.stage("load", t0);
       io::save_gltf(file, *output);
       g.stage("save", t0);
-      uint64_t in = std::filesystem::file_size(*input), out = std::filesystem::file_size(*output);
-      std::printf("%s (%s) -> %s (%s)\n", input->c_str(), human_bytes(in).c_str(), output->c_str(),
-                  human_bytes(out).c_str());
-      g.write_report({{"input", *input}, {"output", *output}, {"input_bytes", in}, {"output_bytes", out}});
+      // The whole asset (JSON, buffers, images) before and after; images are carried byte
+      // for byte, so their costs are the same on both sides.
+      const uint64_t in = io::asset_bytes(*input, g.refs()).total(), out = io::asset_bytes(*output).total();
+      const auto costs = pipeline::image_costs(file);
+      std::printf("%s (%s) -> %s (%s), textures %s, VRAM (BC7, mips) %s\n", input->c_str(), human_bytes(in).c_str(),
+                  output->c_str(), human_bytes(out).c_str(), human_bytes(costs["totals"]["bytes"].get<uint64_t>()).c_str(),
+                  human_bytes(costs["totals"]["vram_bc7_mips"].get<uint64_t>()).c_str());
+      g.write_report({{"input", *input}, {"output", *output}, {"input_bytes", in}, {"output_bytes", out},
+                      {"textures", costs["textures"]}, {"texture_totals", costs["totals"]}});
       return 0;
     };
   });

@@ -3,6 +3,7 @@
 #include "cli.h"
 
 #include "core/error.h"
+#include "io/asset_bytes.h"
 #include "io/gltf_io.h"
 #include "pipeline/reparam.h"
 
@@ -107,7 +108,9 @@ void add_reparam(CLI::App& app, Globals& g) {
       progress.finish();
       io::save_gltf(file, *output);
       double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-      uint64_t in_bytes = std::filesystem::file_size(*input), out_bytes = std::filesystem::file_size(*output);
+      // The whole asset before and after: JSON, buffers and images (or the .glb).
+      const io::AssetBytes in_files = io::asset_bytes(*input, g.refs()), out_files = io::asset_bytes(*output);
+      const uint64_t in_bytes = in_files.total(), out_bytes = out_files.total();
       for (const auto& w : report["warnings"]) std::fprintf(stderr, "uvpress: %s: warning: %s\n", input->c_str(), w.get<std::string>().c_str());
       const uint64_t old_t = texels(report["textures"], "old_size"), new_t = texels(report["textures"], "new_size");
       // Triangles whose search never met eps keep their shape: say so on the summary line.
@@ -140,15 +143,26 @@ void add_reparam(CLI::App& app, Globals& g) {
                         gr["q_resize"].get<double>(), gr["q_reparam"].get<double>());
         verdict = text;
       }
-      std::printf("%s (%s, %llu texels) -> %s (%s, %llu texels), cost ratio %.3f%s%s%s, %.1f s\n", input->c_str(),
+      // Texture bytes as encoded, and VRAM block-compressed (BC7/ASTC 4x4) with mip-maps.
+      std::string textures;
+      if (report.contains("texture_totals")) {
+        const auto& tt = report["texture_totals"];
+        textures = ", textures " + human_bytes(tt["old"]["bytes"].get<uint64_t>()) + " -> " +
+                   human_bytes(tt["new"]["bytes"].get<uint64_t>()) + ", VRAM (BC7, mips) " +
+                   human_bytes(tt["old"]["vram_bc7_mips"].get<uint64_t>()) + " -> " +
+                   human_bytes(tt["new"]["vram_bc7_mips"].get<uint64_t>());
+      }
+      std::printf("%s (%s, %llu texels) -> %s (%s, %llu texels)%s, cost ratio %.3f%s%s%s, %.1f s\n", input->c_str(),
                   human_bytes(in_bytes).c_str(), (unsigned long long)old_t, output->c_str(), human_bytes(out_bytes).c_str(),
-                  (unsigned long long)new_t, report["cost_ratio"].get<double>(), capped.c_str(), infeasible.c_str(),
-                  verdict.c_str(), seconds);
+                  (unsigned long long)new_t, textures.c_str(), report["cost_ratio"].get<double>(), capped.c_str(),
+                  infeasible.c_str(), verdict.c_str(), seconds);
       if (g.verbose)
         for (auto& [stage, s] : report["stages"].items()) std::fprintf(stderr, "%s: %.2f s\n", stage.c_str(), s.get<double>());
       nlohmann::ordered_json out = {{"input", *input}, {"output", *output}, {"device", report["device"]},
                                     {"backend", report["backend"]}, {"seconds", seconds}, {"input_bytes", in_bytes},
-                                    {"output_bytes", out_bytes}};
+                                    {"output_bytes", out_bytes},
+                                    {"input_files", {{"file", in_files.file}, {"buffers", in_files.buffers}, {"images", in_files.images}}},
+                                    {"output_files", {{"file", out_files.file}, {"buffers", out_files.buffers}, {"images", out_files.images}}}};
       for (auto& [key, value] : report.items())
         if (!out.contains(key)) out[key] = value;
       out["seconds"] = seconds;

@@ -1,0 +1,22 @@
+#include "io/asset_bytes.h"
+
+#include "io/atomic_file.h"
+
+#include <set>
+
+namespace uvpress::io {
+
+AssetBytes asset_bytes(const std::string& path, const RefPolicy& refs) {
+  const std::vector<uint8_t> bytes = read_file(path);
+  AssetBytes out;
+  out.file = bytes.size();
+  std::set<std::string> seen;
+  for (const ExternalRef& ref : external_refs(bytes)) {
+    OpenRef open = open_ref(path, ref, refs);
+    if (!seen.insert(open.path.string()).second) continue;
+    (ref.buffer ? out.buffers : out.images) += open.file.size();
+  }
+  return out;
+}
+
+}  // namespace uvpress::io

@@ -1,0 +1,24 @@
+// What an asset weighs on disk and on the wire: the .gltf JSON with every external buffer
+// and image it names, or the .glb (whose BIN chunk holds them). The summary lines and
+// reports count this, not the .gltf text alone (Fox.gltf is 44 KB of a 187 KB asset).
+#pragma once
+
+#include "io/references.h"
+
+#include <cstdint>
+#include <string>
+
+namespace uvpress::io {
+
+struct AssetBytes {
+  uint64_t file = 0;     // the .gltf or .glb itself
+  uint64_t buffers = 0;  // external buffer files
+  uint64_t images = 0;   // external image files
+  uint64_t total() const { return file + buffers + images; }
+};
+
+// Files are found by the loader's rule (references.h); a file named twice counts once.
+// Throws InputError as the loader would for a reference that is refused or missing.
+AssetBytes asset_bytes(const std::string& path, const RefPolicy& refs = {});
+
+}  // namespace uvpress::io

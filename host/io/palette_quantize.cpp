@@ -1,0 +1,43 @@
+#include "io/palette_quantize.h"
+
+#include <libimagequant.h>
+
+#include <memory>
+#include <stdexcept>
+
+namespace uvpress::io {
+
+namespace {
+
+struct Free {
+  void operator()(liq_attr* p) const { liq_attr_destroy(p); }
+  void operator()(liq_image* p) const { liq_image_destroy(p); }
+  void operator()(liq_result* p) const { liq_result_destroy(p); }
+};
+
+}  // namespace
+
+PaletteImage quantize_palette(const uint8_t* rgba, uint32_t width, uint32_t height, float dithering) {
+  std::unique_ptr<liq_attr, Free> attr(liq_attr_create());
+  if (!attr) throw std::runtime_error("libimagequant: out of memory");
+  liq_set_max_colors(attr.get(), 256);
+  // Speed 1 (the slowest, best palette): textures are few and a palette is chosen once.
+  liq_set_speed(attr.get(), 1);
+  // Gamma 0: libimagequant's default (sRGB-like), which is how colour textures are stored.
+  std::unique_ptr<liq_image, Free> image(liq_image_create_rgba(attr.get(), rgba, int(width), int(height), 0));
+  if (!image) throw std::runtime_error("libimagequant: cannot take a " + std::to_string(width) + "x" + std::to_string(height) + " image");
+  liq_result* raw = nullptr;
+  if (liq_image_quantize(image.get(), attr.get(), &raw) != LIQ_OK || !raw) throw std::runtime_error("libimagequant: quantization failed");
+  std::unique_ptr<liq_result, Free> result(raw);
+  liq_set_dithering_level(result.get(), dithering);
+  PaletteImage out;
+  out.indices.resize(size_t(width) * height);
+  if (liq_write_remapped_image(result.get(), image.get(), out.indices.data(), out.indices.size()) != LIQ_OK)
+    throw std::runtime_error("libimagequant: remapping failed");
+  const liq_palette* palette = liq_get_palette(result.get());
+  for (unsigned i = 0; i < palette->count; ++i)
+    out.palette.push_back({palette->entries[i].r, palette->entries[i].g, palette->entries[i].b, palette->entries[i].a});
+  return out;
+}
+
+}  // namespace uvpress::io

@@ -1,0 +1,25 @@
+// PNG writing through libpng directly, as tight as libpng gets: zlib level 9 with its
+// largest memory level, and several row-filter choices tried (adaptive per row, none,
+// Paeth only), the smallest file kept. OpenImageIO's PNG writer offers neither the filter
+// choice nor a palette.
+#pragma once
+
+#include "core/image.h"
+
+#include <cstdint>
+#include <vector>
+
+namespace uvpress::io {
+
+struct PngOptions {
+  // Quantize to an 8-bit palette (libimagequant; io/palette_quantize.h). For inputs that
+  // were paletted; ignored for 16-bit images.
+  bool palette = false;
+  float dithering = 1.0f;  // Floyd-Steinberg strength for the palette (libimagequant's default)
+};
+
+// Stored values as they are (no colour conversion). An alpha channel whose every texel is
+// opaque is not written (grey+alpha -> grey, RGBA -> RGB; a palette gets no tRNS chunk).
+std::vector<uint8_t> encode_png(const Image& image, const PngOptions& options);
+
+}  // namespace uvpress::io
