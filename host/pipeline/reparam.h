@@ -25,8 +25,8 @@ struct ReparamOptions {
   // 1:2 (or 4:1, 1:4) of it when that holds the charts at a larger scale (atlas/pack.h).
   bool keep_aspect = false;
   // Texels between charts and at the image edge. kAutoGutter: mip-safe for the image's size
-  // (atlas::mip_safe_gutter: every mip level clean down to the first of side <= 64 texels;
-  // 8 texels for a 362^2 image, 32 for 2048^2).
+  // (atlas::mip_safe_gutter: every mip level clean down to the first of side <= 64 texels,
+  // at most 16: 8 texels for a 362^2 image, 16 from 1024^2 on).
   static constexpr uint32_t kAutoGutter = UINT32_MAX;
   uint32_t gutter = kAutoGutter;
   uint32_t block = 1;      // chart alignment (4 for BCn)

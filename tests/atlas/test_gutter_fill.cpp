@@ -138,6 +138,7 @@ TEST_CASE("gutter fill: the mip-safe gutter grows with the image's side", "[atla
   CHECK(atlas::mip_safe_gutter(256.0 * 256) == 4);  // clean down to 64^2
   CHECK(atlas::mip_safe_gutter(362.0 * 362) == 8);  // Duck at half its texels: clean to 45^2
   CHECK(atlas::mip_safe_gutter(1024.0 * 512) == 16);
-  CHECK(atlas::mip_safe_gutter(2048.0 * 2048) == 32);
-  CHECK(atlas::mip_safe_gutter(16384.0 * 16384) == 64);  // the maximum
+  CHECK(atlas::mip_safe_gutter(2048.0 * 2048) == 16);   // the cap
+  CHECK(atlas::mip_safe_gutter(2048.0 * 2048, 64, 4, 64) == 32);
+  CHECK(atlas::mip_safe_gutter(16384.0 * 16384, 64, 4, 64) == 64);
 }
