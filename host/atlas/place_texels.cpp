@@ -7,8 +7,9 @@
 namespace uvpress::atlas {
 
 size_t copy_chart_texels(const Image& resized, const ChartShape& shape, const Packing& packing, size_t index,
-                         uint32_t dilation, Image& atlas) {
+                         uint32_t dilation, Image& atlas, std::vector<uint8_t>* copied_mask) {
   if (index >= packing.placements.size() || resized.channels != atlas.channels) return 0;
+  if (copied_mask && copied_mask->size() != size_t(atlas.width) * atlas.height) copied_mask = nullptr;
   const ChartPlacement& pl = packing.placements[index];
   const long tx = std::lround(pl.tx), ty = std::lround(pl.ty);
   const size_t n = shape.points.size() / 2;
@@ -67,6 +68,7 @@ size_t copy_chart_texels(const Image& resized, const ChartShape& shape, const Pa
       if (sx < 0 || sy < 0 || sx >= long(resized.width) || sy >= long(resized.height)) continue;
       const float* from = &resized.pixels[(size_t(sy) * resized.width + size_t(sx)) * C];
       std::copy(from, from + C, &atlas.pixels[(size_t(y) * atlas.width + size_t(x)) * C]);
+      if (copied_mask) (*copied_mask)[size_t(y) * atlas.width + size_t(x)] = 1;
       ++copied;
     }
   return copied;

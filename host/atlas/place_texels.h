@@ -15,6 +15,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <vector>
 
 namespace uvpress::atlas {
 
@@ -24,8 +25,10 @@ namespace uvpress::atlas {
 // own neighbours too, takes the texel of `resized` that the placement maps onto it. The
 // chart's points times packing.scale must be in `resized`'s texel units and the placement a
 // whole-texel translation (snap), with `resized` and `atlas` of the same channel count.
-// Texels that map outside `resized` are left as they are. Returns the number copied.
+// Texels that map outside `resized` are left as they are. Returns the number copied; when
+// `copied` is given (atlas width * height bytes) every texel written is set to 1 in it, so
+// that the gutter can be refilled from the copies (atlas/gutter_fill.h).
 size_t copy_chart_texels(const Image& resized, const ChartShape& shape, const Packing& packing, size_t index,
-                         uint32_t dilation, Image& atlas);
+                         uint32_t dilation, Image& atlas, std::vector<uint8_t>* copied = nullptr);
 
 }  // namespace uvpress::atlas

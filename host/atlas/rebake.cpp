@@ -70,80 +70,7 @@ void polar_factor(const double M[2][2], float Q[2][2]) {
   }
 }
 
-// Nearest covered texel for every texel (exact squared Euclidean distance transform,
-// Felzenszwalb & Huttenlocher): columns, then the lower envelope of parabolas per row.
-std::vector<int64_t> nearest_covered(const std::vector<uint8_t>& covered, int W, int H) {
-  std::vector<int32_t> col(size_t(W) * H, -1);  // nearest covered row in the same column
-#pragma omp parallel for schedule(static)
-  for (int x = 0; x < W; ++x) {
-    int last = -1;
-    for (int y = 0; y < H; ++y) {
-      if (covered[size_t(y) * W + x]) last = y;
-      col[size_t(y) * W + x] = last;
-    }
-    last = -1;
-    for (int y = H - 1; y >= 0; --y) {
-      if (covered[size_t(y) * W + x]) last = y;
-      int32_t& c = col[size_t(y) * W + x];
-      if (last >= 0 && (c < 0 || last - y < y - c)) c = last;
-    }
-  }
-  std::vector<int64_t> nearest(size_t(W) * H, -1);
-#pragma omp parallel
-  {
-    std::vector<int> v(W);
-    std::vector<double> z(W + 1);
-#pragma omp for schedule(static)
-    for (int y = 0; y < H; ++y) {
-      auto h = [&](int q) {
-        const double d = double(y - col[size_t(y) * W + q]);
-        return d * d;
-      };
-      int k = -1;
-      for (int q = 0; q < W; ++q) {
-        if (col[size_t(y) * W + q] < 0) continue;
-        const double fq = h(q) + double(q) * q;
-        double s = 0;
-        while (k >= 0) {
-          const int p = v[k];
-          s = (fq - (h(p) + double(p) * p)) / (2.0 * (q - p));
-          if (s <= z[k]) {
-            --k;
-          } else {
-            break;
-          }
-        }
-        ++k;
-        v[k] = q;
-        z[k] = k == 0 ? -std::numeric_limits<double>::infinity() : s;
-        z[k + 1] = std::numeric_limits<double>::infinity();
-      }
-      if (k < 0) continue;
-      int j = 0;
-      for (int x = 0; x < W; ++x) {
-        while (z[j + 1] < x) ++j;
-        const int q = v[j];
-        nearest[size_t(y) * W + x] = int64_t(col[size_t(y) * W + q]) * W + q;
-      }
-    }
-  }
-  return nearest;
-}
-
 }  // namespace
-
-void fill_gutter(Image& image, const std::vector<uint8_t>& covered) {
-  const int W = int(image.width), H = int(image.height), C = int(image.channels);
-  size_t count = 0;
-  for (uint8_t c : covered) count += c != 0;
-  if (count == 0 || count == covered.size()) return;
-  const std::vector<int64_t> nearest = nearest_covered(covered, W, H);
-#pragma omp parallel for schedule(static)
-  for (int64_t i = 0; i < int64_t(W) * H; ++i) {
-    if (covered[size_t(i)] || nearest[size_t(i)] < 0) continue;
-    std::copy_n(&image.pixels[size_t(nearest[size_t(i)]) * C], C, &image.pixels[size_t(i) * C]);
-  }
-}
 
 float srgb_decode_fast(float v) { return srgb_table()[size_t(std::clamp(v, 0.0f, 1.0f) * 65535.0f + 0.5f)]; }
 
@@ -387,7 +314,7 @@ Image rebake(const Image& source, const std::vector<RebakeMesh>& meshes, const R
 
   size_t count = 0;
   for (uint8_t c : covered) count += c;
-  if (opt.fill_gutter) fill_gutter(out, covered);
+  if (opt.fill_gutter) fill_gutter(out, covered, opt.role == RebakeRole::Color);
   if (stats) {
     stats->covered = count;
     stats->triangles = tris.size();

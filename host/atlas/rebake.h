@@ -30,12 +30,13 @@
 // exact. When the Jacobian mirrors (det < 0) the factor is a reflection, which keeps xy
 // correct relative to the new u/v axes (tangents' handedness is then the caller's).
 //
-// Gutter: texels covered by no triangle take the value of the nearest covered texel
-// (exact Euclidean distance transform, Felzenszwalb-Huttenlocher, ties to the first in
-// scan order): every gutter texel holds the colour of the chart edge nearest to it, so
-// bilinear and mip sampling at chart borders sees chart colours, never background.
+// Gutter: texels covered by no triangle are filled for the mip chain (atlas/gutter_fill.h):
+// a ring of the nearest chart texel's value, then each chart's colour extended through
+// every mip level, so bilinear and mip sampling at chart borders sees chart colours,
+// never background or (down to the level the gutter's width allows) a neighbour's.
 #pragma once
 
+#include "atlas/gutter_fill.h"
 #include "core/image.h"
 #include "engine.h"
 
@@ -121,11 +122,6 @@ struct RebakePlan {
   // The engine's view of the plan (pointers into it and into *source).
   engine::RebakeTexelsDesc desc(const RebakeOptions& options) const;
 };
-
-// The gutter fill rebake() ends with: every texel with covered == 0 (width * height bytes)
-// takes the value of the nearest texel with covered != 0 (exact Euclidean distance, ties to
-// the first in scan order). Nothing happens when none or all are covered.
-void fill_gutter(Image& image, const std::vector<uint8_t>& covered);
 
 // Throws like rebake() for an empty source or zero size.
 RebakePlan plan_rebake(const Image& source, const std::vector<RebakeMesh>& meshes, const RebakeOptions& options);

@@ -148,7 +148,7 @@ Image rebake_lanczos(const Image& source, const std::vector<RebakeMesh>& meshes,
       float* o = &out.pixels[(size_t(y) * W + x) * C];
       for (int ch = 0; ch < C; ++ch) o[ch] = float(std::clamp(acc[ch] / wsum, 0.0, 1.0));
     }
-  if (options.fill_gutter) fill_gutter(out, covered);
+  if (options.fill_gutter) fill_gutter(out, covered, options.role == RebakeRole::Color);
   return out;
 }
 

@@ -356,7 +356,7 @@ Image rebake_least_squares(const Image& source, const std::vector<RebakeMesh>& m
     // Texels the area bake covered but no sample reached (slivers) keep their value.
     for (size_t t = 0; t < solved.size(); ++t)
       if (plan.owner[t] != engine::kRebakeNoOwner) solved[t] = 1;
-    fill_gutter(out, solved);
+    fill_gutter(out, solved, opt.role == RebakeRole::Color);
   }
   st.solved = true;
   return finish(std::move(out));

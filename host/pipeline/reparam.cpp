@@ -404,7 +404,14 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
     budget.keep_aspect = o.keep_aspect;
     budget.s_max = s_max;
     budget.measure = atlas::CostMeasure::ImageTexels;  // --cost is about texture memory
-    budget.pack.gutter = o.gutter, budget.pack.block = o.block;
+    // The gutter: as asked, or mip-safe for the image the budget buys (its texels are known
+    // before packing: --cost of the source's, --size N at the source's aspect; --max-gmsd
+    // bakes at the source's size and shrinks the gutters with the image).
+    const double budget_texels = o.max_gmsd > 0 ? double(W) * H
+                                 : o.size > 0    ? double(o.size) * o.size * std::min(W, H) / std::max(W, H)
+                                                 : o.cost * W * H;
+    const uint32_t gutter = o.gutter == ReparamOptions::kAutoGutter ? atlas::mip_safe_gutter(budget_texels) : o.gutter;
+    budget.pack.gutter = gutter, budget.pack.block = o.block;
     std::vector<char> unit_exact(P.units.size(), 0);
     if (o.exact_texels && cand.exact)
       for (size_t u = 0; u < P.units.size(); ++u) {
@@ -522,7 +529,8 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
       const bool copies = Rw > 0 && source.width == P.driver.width && source.height == P.driver.height &&
                           ro.role != atlas::RebakeRole::Normal;
       const bool all_copied = copies && std::find(unit_exact.begin(), unit_exact.end(), 0) == unit_exact.end();
-      Image baked = atlas::rebake(source, meshes, ro, nullptr, &engine);
+      atlas::RebakeStats coverage;
+      Image baked = atlas::rebake(source, meshes, ro, &coverage, &engine);
       if (cand.bake == Candidate::Bake::Lanczos && !all_copied) baked = atlas::rebake_lanczos(source, meshes, ro, baked);
       if (cand.bake == Candidate::Bake::LeastSquares && ro.role != atlas::RebakeRole::Normal) {
         atlas::LsqBakeStats lsq;
@@ -536,9 +544,13 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
       size_t copied = 0;
       if (copies) {
         const Image resized = Rw == source.width && Rh == source.height ? source : eval::resize_lanczos3(source, Rw, Rh, false);
-        const uint32_t dilation = std::min(1u, o.gutter / 2);
+        const uint32_t dilation = std::min(1u, gutter / 2);
+        std::vector<uint8_t>& known = coverage.coverage;  // the bake's texels, then the copies'
         for (size_t u = 0; u < P.units.size(); ++u)
-          if (unit_exact[u]) copied += atlas::copy_chart_texels(resized, shapes[u], packing, u, dilation, baked);
+          if (unit_exact[u]) copied += atlas::copy_chart_texels(resized, shapes[u], packing, u, dilation, baked, &known);
+        // The gutter filled again from what is now at the charts' edges: the copies (and
+        // their one-texel ring of the source's own neighbours), not the bake they replaced.
+        if (copied) atlas::fill_gutter(baked, known, ro.role == atlas::RebakeRole::Color);
       }
       exact_texels += copied;
       const std::vector<uint8_t> old_bytes = file.image_bytes[size_t(i)];
@@ -580,6 +592,7 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
     jl["scale_cap"] = s_max;  // the source density of the densest triangles
     jl["capped_at_source_density"] = packing.scale >= 0.999 * s_max;
     jl["packing_efficiency"] = packing.efficiency;   // share of the image's texels under charts
+    jl["gutter"] = gutter;                            // texels between charts and at the edge
     jl["gutter_texels"] = packing.gutter_texels;      // texels kept empty around charts and at the edge
     jl["chart_cost_ratio"] = choice.cost_ratio;
     jl["flips"] = layout_flips;

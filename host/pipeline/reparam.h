@@ -12,6 +12,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <cstdint>
 #include <functional>
 #include <string>
 
@@ -24,7 +25,11 @@ struct ReparamOptions {
   // The new textures keep the source's aspect ratio. Otherwise the packer may choose 2:1,
   // 1:2 (or 4:1, 1:4) of it when that holds the charts at a larger scale (atlas/pack.h).
   bool keep_aspect = false;
-  uint32_t gutter = 4;     // texels between charts and at the image edge
+  // Texels between charts and at the image edge. kAutoGutter: mip-safe for the image's size
+  // (atlas::mip_safe_gutter: every mip level clean down to the first of side <= 64 texels,
+  // at most 16: 8 texels for a 362^2 image, 16 from 1024^2 on).
+  static constexpr uint32_t kAutoGutter = UINT32_MAX;
+  uint32_t gutter = kAutoGutter;
   uint32_t block = 1;      // chart alignment (4 for BCn)
   bool optimize = true;    // false: keep every Jacobian (identity), only repack and re-bake
   // Instead of a cost: the smallest textures whose 20-view quality (eval, mean GMSD against

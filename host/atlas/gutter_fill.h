@@ -1,0 +1,60 @@
+// Filling the gutters for the mip chain.
+//
+// A viewer builds the mip chain itself (glGenerateMipmap: 2x2 box averages, colour in
+// linear light), so the written image controls level 0 only; yet far away, and at grazing
+// angles even near, what is sampled is a coarse level, whose texels average 2^k x 2^k
+// blocks of level 0. Every gutter texel reaches the screen through each level whose block
+// holds it and a chart texel, so the fill decides what colour a chart's edge has at a
+// distance. The fill:
+//
+//  1. Ring: empty texels whose nearest chart texel (exact Euclidean distance transform,
+//     ties to the first in scan order) is at most `ring` texels away in x and in y take
+//     that texel's value. Bilinear taps just outside a chart's footprint at level 0 read its
+//     edge colour, as with a nearest fill.
+//  2. Mip-consistent pull-push: the known texels (charts and ring) are averaged up a
+//     pyramid of 2x2 blocks aligned to the image's origin (a block's value: the mean of its
+//     non-empty children's values, colour channels in linear light when `srgb`), each block
+//     labelled with the chart it holds — an 8-connected component of the known texels — or
+//     as holding several. An empty texel takes the value of the smallest non-empty block
+//     around it when that block holds one chart: then every block, at every level, that
+//     holds texels of one chart and no other averages to that chart's own (binary-weighted)
+//     mean — the chart's colour extended through the whole mip chain, neither background
+//     nor a neighbour's. Where the smallest non-empty block holds two charts (the gutter
+//     between them narrower than the block), the texel takes its nearest chart texel's
+//     value instead: each chart's colour reaches the midline between them.
+//
+// So a chart's own colour is clean at level k wherever no 2^k-aligned block of 2^k texels
+// holds texels of another chart: guaranteed at every level k with 2^k <= the gutter
+// between footprints (atlas/pack.h), and the gutter sets how coarse a level stays clean
+// (mip_safe_gutter below).
+#pragma once
+
+#include "core/image.h"
+
+#include <cstdint>
+#include <vector>
+
+namespace uvpress::atlas {
+
+// Every texel with covered == 0 (width * height bytes, row 0 on top) is filled as above;
+// covered texels are left as they are. `srgb`: the image's colour channels (all but an
+// alpha channel) are sRGB-encoded and averaged in linear light (the filled values are
+// re-encoded); otherwise every channel is averaged as stored. Nothing happens when no
+// texel or every texel is covered. Deterministic.
+void fill_gutter(Image& image, const std::vector<uint8_t>& covered, bool srgb = false, uint32_t ring = 1);
+
+// The gutter (texels between charts, atlas/pack.h) that keeps every mip level clean down to
+// the first whose side is at most `coarsest_side` texels, for an image of `image_texels`
+// (W x H; the side taken as sqrt(W H)): with the fill above a level k is clean when the
+// gutter is at least 2^k, so this is 2^ceil(log2(side / coarsest_side)), at least
+// `minimum` and at most `maximum`. A fixed screen size sees a level that many times finer
+// as the image grows, so the gutter grows with the image's side (a 362^2 image: 8 texels,
+// clean down to its 45^2 level; 1024^2 and up: 16). The defaults are the measured ones
+// (README, "Gutters"): Duck at half its texels (362^2) seen from a third of a 256-pixel
+// view in three.js (tests/client) bleeds at a 4- or 6-texel gutter and is clean at 8; the
+// cap of 16 (twice the artists' 8 at 2048^2) because wider ones cost the eval score more
+// than the far views gain (CesiumMilkTruck at half its texels: packing efficiency 0.71 at
+// 4, 0.65 at 16, 0.56 at 32, with the same three.js figures at 16 and 32).
+uint32_t mip_safe_gutter(double image_texels, uint32_t coarsest_side = 64, uint32_t minimum = 4, uint32_t maximum = 16);
+
+}  // namespace uvpress::atlas
