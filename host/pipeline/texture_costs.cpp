@@ -24,7 +24,8 @@ json image_costs(const io::GltfFile& file) {
       const io::ImageHeader h = io::read_image_header(b, file.path);
       const TextureCost c = texture_cost(h.width, h.height);
       t["size"] = {h.width, h.height};
-      for (auto& [key, value] : cost_json(c, b.size()).items()) t[key] = value;
+      const json cost = cost_json(c, b.size());  // named: a temporary's items() would dangle
+      for (auto& [key, value] : cost.items()) t[key] = value;
       total.texels += c.texels, total.vram_rgba8 += c.vram_rgba8, total.vram_bc7 += c.vram_bc7;
     } else {
       t["bytes"] = b.size();  // carried as it is; its texels are not read

@@ -204,7 +204,7 @@ TEST_CASE("batch: SIGKILL mid-way, then resume: every output complete and valid"
   size_t kills = 0, done_at_kill = 0;
   std::vector<size_t> done_after_kill;
   for (int round = 0; round < 2; ++round) {
-    std::vector<std::string> args = {UVPRESS_BINARY, "batch", "--manifest", manifest, "-o", out_dir, "--no-optimize",
+    std::vector<std::string> args = {UVPRESS_BINARY, "batch", "--manifest", manifest, "-o", out_dir, "--no-optimize", "--score-resolution", "512",
                                      "--device", "cpu", "--jobs", round == 1 ? "2" : "1"};
     std::vector<char*> argv;
     for (auto& s : args) argv.push_back(s.data());

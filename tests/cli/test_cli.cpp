@@ -88,7 +88,7 @@ TEST_CASE("CLI: copy writes a valid .glb and .gltf", "[cli][shared]") {
   test::Scratch dir("cli-copy");
   const auto folder = *shared / "assets/CesiumMilkTruck/glTF";
   // The whole asset: JSON, .bin and the PNG, not the .gltf text alone.
-  const uint64_t whole = fs::file_size(folder / "CesiumMilkTruck.gltf") + fs::file_size(folder / "CesiumMilkTruck.bin") +
+  const uint64_t whole = fs::file_size(folder / "CesiumMilkTruck.gltf") + fs::file_size(folder / "CesiumMilkTruck0.bin") +
                          fs::file_size(folder / "CesiumMilkTruck.png");
   for (const char* name : {"truck.glb", "truck.gltf"}) {
     const auto report_path = dir / (std::string(name) + ".json");
@@ -122,7 +122,7 @@ TEST_CASE("CLI: copy writes a valid .glb and .gltf", "[cli][shared]") {
 
 TEST_CASE("CLI: demo writes the asset, its reparam and the eval report", "[cli][demo]") {
   test::Scratch dir("cli-demo");
-  auto r = run_uvpress("demo -o " + quoted(dir.path()) + " --evaluations 12 --device cpu -v --report " +
+  auto r = run_uvpress("demo -o " + quoted(dir.path()) + " --evaluations 12 --resolution 512 --device cpu -v --report " +
                        quoted(dir / "demo.json"));
   INFO(r.err);
   REQUIRE(r.exit_code == 0);

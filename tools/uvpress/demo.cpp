@@ -21,8 +21,11 @@ void add_demo(CLI::App& app, Globals& g) {
   auto evaluations = std::make_shared<int>(40);
   cmd->add_option("-o,--output", *dir, "Output folder (created if missing)")->capture_default_str();
   cmd->add_option("--evaluations", *evaluations, "GP-BO evaluations per triangle")->capture_default_str()->check(CLI::Range(11, 1000));
-  cmd->callback([&g, dir, evaluations] {
-    g.action = [&g, dir, evaluations] {
+  // eval's views, for the evaluation and for reparam's candidates and guard alike.
+  auto view = std::make_shared<eval::EvalOptions>();
+  add_view_options(cmd, view->resolution, view->filter, "--");
+  cmd->callback([&g, dir, evaluations, view] {
+    g.action = [&g, dir, evaluations, view] {
       namespace fs = std::filesystem;
       auto t0 = std::chrono::steady_clock::now();
       g.prepare_outputs({}, {*dir});
@@ -37,7 +40,9 @@ void add_demo(CLI::App& app, Globals& g) {
       io::GltfFile file = original;
       pipeline::ReparamOptions options;
       options.triangle.evaluations = *evaluations;
+      options.score_resolution = view->resolution, options.score_filter = view->filter;
       eval::EvalOptions eo;
+      eo.resolution = view->resolution, eo.filter = view->filter;
       eo.flatten = true;
       options.curve_costs = eo.cost_grid;  // reparam's own curve, as written, for the verdict
       const bool tty = isatty(2);
