@@ -38,8 +38,9 @@ void add_view_options(CLI::App* cmd, uint32_t& resolution, eval::TextureFilter& 
              throw CLI::ValidationError(prefix + "resolution", "must be auto or 8.." + std::to_string(eval::kMaxResolution));
            resolution = n;
          },
-         "View images, pixels a side, or auto: the smallest side >= 512 at which 95% of the visible surface shows "
-         "at most one texel per pixel, capped at 2048 (default auto)")
+         (prefix == "--score-" ? std::string("reparam's candidates and guard: ") : std::string()) +
+             "View images, pixels a side, or auto: the smallest side >= 512 at which 95% of the visible surface "
+             "shows at most one texel per pixel, capped at 2048 (default auto)")
       ->type_name("auto|N");
   cmd->add_option_function<std::string>(
          prefix + "filter",
@@ -48,7 +49,8 @@ void add_view_options(CLI::App* cmd, uint32_t& resolution, eval::TextureFilter& 
            if (!f) throw CLI::ValidationError(prefix + "filter", "must be trilinear or bilinear");
            filter = *f;
          },
-         "How views sample textures: trilinear (mip-mapped, as engines do; default) or bilinear (level 0 only)")
+         (prefix == "--score-" ? std::string("reparam's candidates and guard: ") : std::string()) +
+             "How views sample textures: trilinear (mip-mapped, as engines do; default) or bilinear (level 0 only)")
       ->type_name("trilinear|bilinear");
 }
 
