@@ -238,7 +238,9 @@ TEST_CASE("batch: SIGKILL mid-way, then resume: every output complete and valid"
   REQUIRE(kills >= 1);
   CHECK(done_after_kill.front() < size_t(n));  // killed mid-way
   // Resume to the end.
-  auto r = run_uvpress("batch --manifest " + quoted(test::fs::path(manifest)) + " -o " + quoted(out) + " --no-optimize --device cpu");
+  // The same options (the resume skips only assets done with them).
+  auto r = run_uvpress("batch --manifest " + quoted(test::fs::path(manifest)) + " -o " + quoted(out) +
+                       " --no-optimize --score-resolution 512 --device cpu");
   INFO(r.out << r.err);
   CHECK(r.exit_code == 0);
   auto summary = read_json(out / "summary.json");
