@@ -1,5 +1,5 @@
 // Whole-mesh renders on the CPU: the reference for render_mesh.comp (same integer
-// rasterization, same fp32 operations in the same order) and the Engine default.
+// rasterization, same fp32 operations in the same order per pixel) and the Engine default.
 #include "mesh_render.h"
 
 #include <algorithm>
@@ -84,24 +84,42 @@ void shade_tile(const MeshRenderDesc& d, const ViewSetup& setup, uint32_t tx, ui
   const uint32_t bin = ty * tiles_x(d) + tx;
   const uint32_t first = setup.bin_offsets[bin], last = setup.bin_offsets[bin + 1];
   const uint32_t C = d.channels;
-  for (uint32_t j = ty * shader::kMeshTile; j < std::min(d.height, (ty + 1) * shader::kMeshTile); ++j)
-    for (uint32_t i = tx * shader::kMeshTile; i < std::min(d.width, (tx + 1) * shader::kMeshTile); ++i) {
-      const int32_t px = 16 * int32_t(i) + 8, py = 16 * int32_t(j) + 8;
-      const float cx = float(i) + 0.5f, cy = float(j) + 0.5f;
-      uint32_t best = kNoMeshTriangle;
-      float best_z = 0.0f;
-      for (uint32_t k = first; k < last; ++k) {
-        const MeshTriangle& r = setup.triangles[setup.bin_items[k]];
+  const uint32_t i0 = tx * shader::kMeshTile, i1 = std::min(d.width, (tx + 1) * shader::kMeshTile);
+  const uint32_t j0 = ty * shader::kMeshTile, j1 = std::min(d.height, (ty + 1) * shader::kMeshTile);
+  // Visibility triangle by triangle over the pixels of its snapped box only (the kernel
+  // walks the list pixel by pixel; the same updates in the same order per pixel, so the
+  // same winner): most triangles of a detailed mesh cover a few pixels of the tile.
+  constexpr uint32_t T = shader::kMeshTile;
+  uint32_t best_of[T * T];
+  float best_z_of[T * T];
+  std::fill(best_of, best_of + T * T, kNoMeshTriangle);
+  for (uint32_t k = first; k < last; ++k) {
+    const MeshTriangle& r = setup.triangles[setup.bin_items[k]];
+    // Pixel centres (16 i + 8) inside the box, clamped to the tile.
+    const int32_t bx0 = std::min({r.x0, r.x1, r.x2}), bx1 = std::max({r.x0, r.x1, r.x2});
+    const int32_t by0 = std::min({r.y0, r.y1, r.y2}), by1 = std::max({r.y0, r.y1, r.y2});
+    const int32_t lo_i = std::max(int32_t(i0), (bx0 - 8 + 15) >> 4), hi_i = std::min(int32_t(i1) - 1, (bx1 - 8) >> 4);
+    const int32_t lo_j = std::max(int32_t(j0), (by0 - 8 + 15) >> 4), hi_j = std::min(int32_t(j1) - 1, (by1 - 8) >> 4);
+    for (int32_t j = lo_j; j <= hi_j; ++j)
+      for (int32_t i = lo_i; i <= hi_i; ++i) {
+        const int32_t px = 16 * i + 8, py = 16 * j + 8;
         const int32_t e0 = edge(r.x1, r.y1, r.x2, r.y2, px, py), e1 = edge(r.x2, r.y2, r.x0, r.y0, px, py),
                       e2 = edge(r.x0, r.y0, r.x1, r.y1, px, py);
         if (e0 < 0 || e1 < 0 || e2 < 0) continue;
         if ((e0 == 0 && !owns_edge(r.x1, r.y1, r.x2, r.y2)) || (e1 == 0 && !owns_edge(r.x2, r.y2, r.x0, r.y0)) ||
             (e2 == 0 && !owns_edge(r.x0, r.y0, r.x1, r.y1)))
           continue;
+        const float cx = float(i) + 0.5f, cy = float(j) + 0.5f;
         const float fx = cx - float(r.x0) * 0.0625f, fy = cy - float(r.y0) * 0.0625f;
         const float z = plane(r.inv_w, fx, fy);
-        if (best == kNoMeshTriangle || z > best_z) best = setup.bin_items[k], best_z = z;
+        const size_t t = size_t(j - int32_t(j0)) * T + size_t(i - int32_t(i0));
+        if (best_of[t] == kNoMeshTriangle || z > best_z_of[t]) best_of[t] = setup.bin_items[k], best_z_of[t] = z;
       }
+  }
+  for (uint32_t j = j0; j < j1; ++j)
+    for (uint32_t i = i0; i < i1; ++i) {
+      const float cx = float(i) + 0.5f, cy = float(j) + 0.5f;
+      const uint32_t best = best_of[(j - j0) * T + (i - i0)];
       const size_t p = size_t(j) * d.width + i;
       float* out = pixels + p * C;
       if (best == kNoMeshTriangle) {
