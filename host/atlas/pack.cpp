@@ -396,6 +396,8 @@ Packing place(const Prints& P, uint32_t width, uint32_t height, const PackOption
   out.covered = P.covered;
   const uint32_t b = P.block;
   const int32_t g = int32_t((options.gutter + b - 1) / b);  // gutter in cells
+  const auto edge = [&](uint32_t e) { return int32_t(((e == PackOptions::kEdgeAsGutter ? options.gutter : e) + b - 1) / b); };
+  const int32_t ex = edge(options.edge_x), ey = edge(options.edge_y);  // in cells
   const int32_t wc = int32_t(width / b), hc = int32_t(height / b);
   if (wc <= 0 || hc <= 0 || !(P.scale > 0)) return out;
 
@@ -419,11 +421,11 @@ Packing place(const Prints& P, uint32_t width, uint32_t height, const PackOption
   Blocked blocked(wc, hc);
   std::vector<int32_t> longest(size_t(hc), 0);
   for (int32_t y = 0; y < hc; ++y) {
-    if (y < g || y >= hc - g) {
+    if (y < ey || y >= hc - ey) {
       blocked.set(y, 0, wc - 1);
     } else {
-      blocked.set(y, 0, g - 1);
-      blocked.set(y, wc - g, wc - 1);
+      blocked.set(y, 0, ex - 1);
+      blocked.set(y, wc - ex, wc - 1);
     }
     longest[size_t(y)] = blocked.longest_free(y);
   }

@@ -41,10 +41,22 @@ struct ChartShape {
 };
 
 struct PackOptions {
-  uint32_t gutter = 4;  // empty texels between charts and at the image edge
+  uint32_t gutter = 4;  // empty texels between charts
+  // Empty texels between footprints and the image's left and right edges (edge_x) and its
+  // top and bottom edges (edge_y). Only a sampler that repeats reads across an edge (its
+  // bilinear taps and coarse mip texels wrap to the far side), and there half the gutter on
+  // each side keeps the full gutter across the wrap; one that clamps or mirrors reads the
+  // chart's own edge texels (edge_gutter below).
+  // kEdgeAsGutter: the gutter itself (a sampler of unknown wrap mode).
+  static constexpr uint32_t kEdgeAsGutter = UINT32_MAX;
+  uint32_t edge_x = kEdgeAsGutter, edge_y = kEdgeAsGutter;
   uint32_t block = 1;   // 1, or 4 for BCn block alignment
   bool rotate = true;   // allow quarter turns
 };
+
+// The empty texels a chart needs between itself and an image edge, for `gutter` between
+// charts and a sampler axis that repeats (GL REPEAT) or not (CLAMP_TO_EDGE, MIRRORED_REPEAT).
+inline uint32_t edge_gutter(uint32_t gutter, bool repeats) { return repeats ? (gutter + 1) / 2 : 0; }
 
 // Where one chart goes: atlas = R_k (scale * p) + t, with R_k = R_1^k and
 // R_1 (x, y) = (-y, x) (in the y-down image a clockwise quarter turn).
@@ -64,7 +76,7 @@ struct Packing {
   double chart_area = 0;     // sum of |triangle areas| after scaling, texels^2 (eq. 20: overlaps count twice)
   double covered = 0;        // atlas texels whose centre a chart covers (overlapping charts count once)
   double efficiency = 0;     // covered / (width * height): the share of the image under charts
-  double gutter_texels = 0;  // texels kept empty for gutters (around footprints and along the edge)
+  double gutter_texels = 0;  // texels kept empty for gutters (around footprints and along the edges)
 
   // Chart point (input units) -> atlas texel coordinates.
   std::array<double, 2> map(size_t chart, double x, double y) const;

@@ -256,6 +256,16 @@ perceptual::TriangleTarget target_of(const perceptual::TriangleResult& r, double
   return {rotate ? r.rotation : std::array<double, 4>{1, 0, 0, 1}, S, r.weight_rotation, r.weight_stretch};
 }
 
+// Whether any texture sampling the layout's images repeats along u (S) and v (T): only
+// then may a chart near one image edge be read across it from the far one (atlas::PackOptions).
+std::array<bool, 2> repeating_axes(const io::Asset& asset, const Layout& L) {
+  constexpr int kRepeat = 10497;
+  std::array<bool, 2> r{false, false};
+  for (int i : L.images)
+    for (const io::ImageUse& use : asset.images[size_t(i)].uses) r[0] |= use.wrap_s == kRepeat, r[1] |= use.wrap_t == kRepeat;
+  return r;
+}
+
 // The smallest singular value of the map old -> new of one triangle (both in texels).
 double smallest_stretch(const double* a, const double* b, const double* c, const double* A, const double* B,
                        const double* C) {
@@ -412,6 +422,9 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
                                                  : o.cost * W * H;
     const uint32_t gutter = o.gutter == ReparamOptions::kAutoGutter ? atlas::mip_safe_gutter(budget_texels) : o.gutter;
     budget.pack.gutter = gutter, budget.pack.block = o.block;
+    // Whole-texel copies bring a ring of the source's own neighbours (what bilinear taps
+    // just past a chart's edge read in the input).
+    const uint32_t copy_ring = std::min(1u, gutter / 2);
     std::vector<char> unit_exact(P.units.size(), 0);
     if (o.exact_texels && cand.exact)
       for (size_t u = 0; u < P.units.size(); ++u) {
@@ -419,6 +432,21 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
         for (uint32_t c : P.units[u]) unit_exact[u] &= char(new_uv_of[c] == charts[c].uv);
         shapes[u].snap = unit_exact[u] != 0;  // so that the atlas chosen has room for whole-texel origins
       }
+    // The image edges: half the gutter on an axis a sampler repeats across, else none, but
+    // room for the copies' ring, which clamping would replace by the chart's own edge texels
+    // (unless the unit spans the whole source: then its ring lies outside the source too).
+    const auto repeats = repeating_axes(asset, L);
+    uint32_t ring = 0;
+    for (size_t u = 0; u < P.units.size(); ++u) {
+      if (!unit_exact[u]) continue;
+      double lo[2] = {W, H}, hi[2] = {0, 0};
+      for (uint32_t c : P.units[u])
+        for (size_t k = 0; k < charts[c].uv.size(); k += 2)
+          for (int a = 0; a < 2; ++a) lo[a] = std::min(lo[a], charts[c].uv[k + a]), hi[a] = std::max(hi[a], charts[c].uv[k + a]);
+      if (lo[0] > 0.5 || lo[1] > 0.5 || hi[0] < W - 0.5 || hi[1] < H - 0.5) ring = copy_ring;
+    }
+    budget.pack.edge_x = std::max(ring, atlas::edge_gutter(gutter, repeats[0]));
+    budget.pack.edge_y = std::max(ring, atlas::edge_gutter(gutter, repeats[1]));
     atlas::AtlasChoice choice = atlas::choose_atlas(shapes, P.driver.width, P.driver.height, P.old_used, budget);
     if (!choice.packing.ok)
       throw InputError(file.path, "the charts of layout " + std::to_string(li) + " do not fit any atlas within the budget");
@@ -544,10 +572,9 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
       size_t copied = 0;
       if (copies) {
         const Image resized = Rw == source.width && Rh == source.height ? source : eval::resize_lanczos3(source, Rw, Rh, false);
-        const uint32_t dilation = std::min(1u, gutter / 2);
         std::vector<uint8_t>& known = coverage.coverage;  // the bake's texels, then the copies'
         for (size_t u = 0; u < P.units.size(); ++u)
-          if (unit_exact[u]) copied += atlas::copy_chart_texels(resized, shapes[u], packing, u, dilation, baked, &known);
+          if (unit_exact[u]) copied += atlas::copy_chart_texels(resized, shapes[u], packing, u, copy_ring, baked, &known);
         // The gutter filled again from what is now at the charts' edges: the copies (and
         // their one-texel ring of the source's own neighbours), not the bake they replaced.
         if (copied) atlas::fill_gutter(baked, known, ro.role == atlas::RebakeRole::Color);
@@ -592,8 +619,9 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
     jl["scale_cap"] = s_max;  // the source density of the densest triangles
     jl["capped_at_source_density"] = packing.scale >= 0.999 * s_max;
     jl["packing_efficiency"] = packing.efficiency;   // share of the image's texels under charts
-    jl["gutter"] = gutter;                            // texels between charts and at the edge
-    jl["gutter_texels"] = packing.gutter_texels;      // texels kept empty around charts and at the edge
+    jl["gutter"] = gutter;                            // texels between charts
+    jl["edge_gutter"] = {budget.pack.edge_x, budget.pack.edge_y};  // texels at the left/right and top/bottom edges
+    jl["gutter_texels"] = packing.gutter_texels;      // texels kept empty around charts and at the edges
     jl["chart_cost_ratio"] = choice.cost_ratio;
     jl["flips"] = layout_flips;
     jl["overlaps_new"] = overlaps_new;                      // triangle pairs; 0, or the layout is not written

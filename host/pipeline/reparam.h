@@ -25,7 +25,7 @@ struct ReparamOptions {
   // The new textures keep the source's aspect ratio. Otherwise the packer may choose 2:1,
   // 1:2 (or 4:1, 1:4) of it when that holds the charts at a larger scale (atlas/pack.h).
   bool keep_aspect = false;
-  // Texels between charts and at the image edge. kAutoGutter: mip-safe for the image's size
+  // Texels between charts (the image edges get half of it where a sampler repeats, else none: atlas::edge_gutter). kAutoGutter: mip-safe for the image's size
   // (atlas::mip_safe_gutter: every mip level clean down to the first of side <= 64 texels,
   // at most 16: 8 texels for a 362^2 image, 16 from 1024^2 on).
   static constexpr uint32_t kAutoGutter = UINT32_MAX;

@@ -88,15 +88,19 @@ bool label_atlas(const std::vector<ChartShape>& charts, const Packing& p, std::v
   return ok;
 }
 
-// At least `g` empty texels between charts (any direction) and to the image edge.
-bool gutters_hold(const std::vector<int>& label, uint32_t W, uint32_t H, int g) {
+// At least `g` empty texels between charts (any direction), `ex` to the left and right
+// image edges and `ey` to the top and bottom ones (-1: g).
+bool gutters_hold(const std::vector<int>& label, uint32_t W, uint32_t H, int g, int ex = -1, int ey = -1) {
+  if (ex < 0) ex = g;
+  if (ey < 0) ey = g;
   for (int y = 0; y < int(H); ++y)
     for (int x = 0; x < int(W); ++x) {
       const int l = label[size_t(y) * W + x];
       if (!l) continue;
-      if (x < g || y < g || x >= int(W) - g || y >= int(H) - g) return false;
+      if (x < ex || y < ey || x >= int(W) - ex || y >= int(H) - ey) return false;
       for (int dy = -g; dy <= g; ++dy)
         for (int dx = -g; dx <= g; ++dx) {
+          if (x + dx < 0 || y + dy < 0 || x + dx >= int(W) || y + dy >= int(H)) continue;
           const int m = label[size_t(y + dy) * W + x + dx];
           if (m && m != l) return false;
         }
@@ -329,6 +333,48 @@ TEST_CASE("pack: all four quarter turns map charts where their footprints are", 
     CHECK(label_atlas(charts, p, label));
     CHECK(gutters_hold(label, 40, 40, 2));
   }
+}
+
+TEST_CASE("pack: edge gutters apart from the gutter (a sampler that clamps needs none, one that repeats half)", "[atlas]") {
+  // A 40 x 24 texel rectangle fills a 40 x 24 atlas when the edges need no gutter (clamp).
+  ChartShape rect;
+  rect.points = {0, 0, 40, 0, 40, 24, 0, 24};
+  rect.triangles = {0, 1, 2, 0, 2, 3};
+  PackOptions clamp;
+  clamp.gutter = 8, clamp.edge_x = clamp.edge_y = 0;
+  Packing p = atlas::pack_charts({rect}, 40, 24, 1.0, clamp);
+  REQUIRE(p.ok);
+  CHECK(p.efficiency == Approx(1.0));
+  CHECK(p.gutter_texels == 0);
+  // With the gutter at the edges (the default) it does not fit; with half of it on a
+  // repeating axis (atlas::edge_gutter) it fits exactly that much larger.
+  PackOptions as_gutter;
+  as_gutter.gutter = 8;
+  CHECK_FALSE(atlas::pack_charts({rect}, 40, 24, 1.0, as_gutter).ok);
+  CHECK(atlas::pack_charts({rect}, 56, 40, 1.0, as_gutter).ok);
+  PackOptions wrap_u = clamp;
+  wrap_u.edge_x = atlas::edge_gutter(8, true);
+  CHECK(wrap_u.edge_x == 4);
+  CHECK(atlas::edge_gutter(8, false) == 0);
+  CHECK_FALSE(atlas::pack_charts({rect}, 47, 24, 1.0, wrap_u).ok);
+  p = atlas::pack_charts({rect}, 48, 24, 1.0, wrap_u);
+  REQUIRE(p.ok);
+  std::vector<int> label;
+  CHECK(label_atlas({rect}, p, label));
+  CHECK(gutters_hold(label, 48, 24, 8, 4, 0));
+  CHECK_FALSE(gutters_hold(label, 48, 24, 8, 5, 0));
+  // Many charts: the gutter between them still holds when the edges take less.
+  const auto charts = random_charts(40, 11);
+  PackOptions mixed;
+  mixed.gutter = 4, mixed.edge_x = 2, mixed.edge_y = 0;
+  Packing m = atlas::pack_max_scale(charts, 128, 96, mixed, 1.0);
+  REQUIRE(m.ok);
+  CHECK(label_atlas(charts, m, label));
+  CHECK(gutters_hold(label, 128, 96, 4, 2, 0));
+  // Less edge, more scale (the same charts with the gutter at every edge).
+  PackOptions full;
+  full.gutter = 4;
+  CHECK(m.scale > atlas::pack_max_scale(charts, 128, 96, full, 1.0).scale);
 }
 
 TEST_CASE("pack: overlapping charts count their texels once, gutters are counted", "[atlas]") {

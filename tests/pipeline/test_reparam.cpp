@@ -239,6 +239,45 @@ TEST_CASE("reparam --no-optimize at cost 1: charts that fit at scale 1 keep thei
   CHECK(eval::score_as_written(in, resampled, *engine, eo).q > 1e-4);
 }
 
+TEST_CASE("reparam's gutter at the image edges follows the sampler: none where it clamps, half where it repeats",
+          "[pipeline][reparam]") {
+  auto engine = engine::make_cpu_engine({});
+  // The demo sheet: one chart over the whole texture, its sampler clamping. Repacked at
+  // half the texels it is resampled (no texel copies), so nothing needs room at the edges:
+  // the chart fills the image (with the gutter at the edges it covered 91 %: q 0.0240
+  // instead of 0.0221 on the full-size demo).
+  const io::GltfFile clamped = pipeline::make_demo_asset({16, 256});
+  pipeline::ReparamOptions o = keep_shapes(0.5);
+  o.guard = false;
+  o.score_resolution = 512;
+  io::GltfFile out = clamped;
+  auto r = pipeline::reparam(out, *engine, o);
+  INFO(r.dump());
+  const uint32_t g = r["layouts"][0]["gutter"].get<uint32_t>();
+  CHECK(g >= 4);
+  CHECK(r["layouts"][0]["edge_gutter"].dump() == "[0,0]");
+  CHECK(r["layouts"][0]["packing_efficiency"].get<double>() > 0.99);
+  // At cost 1 it fits at scale 1, so its texels are copied: nothing is lost (with the
+  // gutter at the edges it got scale 0.94).
+  o.cost = 1.0;
+  out = clamped;
+  r = pipeline::reparam(out, *engine, o);
+  CHECK(r["layouts"][0]["scale"].get<double>() == Approx(1.0).margin(1e-12));
+  CHECK(r["layouts"][0]["exact_units"] == 1);
+  eval::EvalOptions eo;
+  eo.artifacts = false;
+  eo.filter = eval::TextureFilter::Bilinear;
+  CHECK(eval::score_as_written(clamped, out, *engine, eo).q < 1e-6);
+  // The same asset at half the texels with a sampler that repeats along u only.
+  o.cost = 0.5;
+  io::GltfFile wrapped = clamped;
+  wrapped.model.samplers[0].wrapS = TINYGLTF_TEXTURE_WRAP_REPEAT;
+  out = wrapped;
+  r = pipeline::reparam(out, *engine, o);
+  CHECK(r["layouts"][0]["edge_gutter"].dump() == "[" + std::to_string((g + 1) / 2) + ",0]");
+  CHECK(r["layouts"][0]["packing_efficiency"].get<double>() < 0.99);
+}
+
 TEST_CASE("reparam prunes what it replaced: no new UNUSED_OBJECT or error, and a reparam of its output does not grow",
           "[pipeline][reparam][shared][prune]") {
   if (!test::shared_dir()) UVPRESS_SKIP("../shared is absent");
