@@ -105,7 +105,7 @@ double seconds_since(std::chrono::steady_clock::time_point t) {
 }  // namespace
 
 Savings pixel_ratio_at_equal_q(const std::vector<std::pair<double, double>>& a,
-                               const std::vector<std::pair<double, double>>& b) {
+                               const std::vector<std::pair<double, double>>& b, double noise_floor) {
   constexpr double kFloor = 1e-9;  // q = 0 (a perfect copy) has no logarithm
   // A's curve made non-increasing (its lower envelope from the left): cost at which A
   // first reaches q, log-log interpolated.
@@ -118,8 +118,24 @@ Savings pixel_ratio_at_equal_q(const std::vector<std::pair<double, double>>& a,
   if (env.empty()) return s;
   const double q_hi = env.front().second, q_lo = env.back().second;
   double log_sum = 0;
+  // A's q at cost c (log-log between its points; none outside its cost range).
+  auto q_of_a = [&](double c) {
+    for (size_t i = 1; i < a.size(); ++i)
+      if (a[i - 1].first <= c && c <= a[i].first && a[i].first > a[i - 1].first) {
+        const double t = std::log(c / a[i - 1].first) / std::log(a[i].first / a[i - 1].first);
+        return std::exp(std::log(std::max(a[i - 1].second, kFloor)) * (1 - t) + std::log(std::max(a[i].second, kFloor)) * t);
+      }
+    return std::numeric_limits<double>::quiet_NaN();
+  };
   for (auto [cb, qb] : b) {
     if (!(qb > kFloor) || qb > q_hi || qb < q_lo) continue;
+    if (s.points == 0) s.q_lo = s.q_hi = qb;
+    s.q_lo = std::min(s.q_lo, qb), s.q_hi = std::max(s.q_hi, qb);
+    ++s.points;
+    if (noise_floor > 0 && std::abs(q_of_a(cb) - qb) <= noise_floor) {  // NaN compares false
+      ++s.ties;
+      continue;  // log ratio 0
+    }
     double ca = env.front().first;
     for (size_t i = 1; i < env.size(); ++i)
       if (env[i].second <= qb) {
@@ -128,21 +144,18 @@ Savings pixel_ratio_at_equal_q(const std::vector<std::pair<double, double>>& a,
         break;
       }
     log_sum += std::log(ca / cb);
-    if (s.points == 0) s.q_lo = s.q_hi = qb;
-    s.q_lo = std::min(s.q_lo, qb), s.q_hi = std::max(s.q_hi, qb);
-    ++s.points;
   }
   s.ratio = s.points ? std::exp(log_sum / double(s.points)) : std::numeric_limits<double>::quiet_NaN();
   return s;
 }
 
-Savings pixel_ratio_at_equal_q(const nlohmann::ordered_json& a, const nlohmann::ordered_json& b) {
+Savings pixel_ratio_at_equal_q(const nlohmann::ordered_json& a, const nlohmann::ordered_json& b, double noise_floor) {
   auto points = [](const nlohmann::ordered_json& curve) {
     std::vector<std::pair<double, double>> cq;
     for (const auto& p : curve) cq.push_back({p["c_r"].get<double>(), p["q"].get<double>()});
     return cq;
   };
-  return pixel_ratio_at_equal_q(points(a), points(b));
+  return pixel_ratio_at_equal_q(points(a), points(b), noise_floor);
 }
 
 namespace {
@@ -761,7 +774,7 @@ nlohmann::ordered_json evaluate(const io::GltfFile& reference, const std::vector
   for (size_t b : bases)
     for (size_t a = 0; a < layouts.size(); ++a) {
       if (a == b || (b != 0 && a == 0)) continue;
-      Savings sv = pixel_ratio_at_equal_q(curves[a], curves[b]);
+      Savings sv = pixel_ratio_at_equal_q(curves[a], curves[b], s.resolution.noise_floor);
       nlohmann::ordered_json row = {{"layout", layouts[a].mesh.name}, {"vs", layouts[b].mesh.name}};
       if (sv.points) {
         row["pixel_ratio_at_equal_q"] = sv.ratio;
@@ -773,6 +786,7 @@ nlohmann::ordered_json evaluate(const io::GltfFile& reference, const std::vector
         row["q_range"] = nullptr;
       }
       row["points"] = sv.points;
+      row["ties"] = sv.ties;  // q levels where the two are within the noise floor (counted as ratio 1)
       savings.push_back(std::move(row));
     }
   report["savings"] = std::move(savings);

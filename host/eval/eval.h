@@ -194,16 +194,22 @@ std::array<float, 16> tile_camera(const std::array<float, 16>& camera, uint32_t 
 
 // Savings of curve A against curve B: points (cost, q) by increasing cost. Returns the
 // geometric mean ratio c_A / c_B at equal q and the number of q levels used (0: the
-// curves' q ranges do not overlap; the ratio is then NaN).
+// curves' q ranges do not overlap; the ratio is then NaN). Where A's q at B's cost is
+// within `noise_floor` of B's, the two cannot be told apart there and that level counts as
+// a ratio of 1 (`ties`): on a curve flatter than the noise, equal-q costs are the noise's
+// (Duck's curve moves 1.8e-4 from c_r 0.6 to 0.9 against a floor of 1.4e-4, and a tie read
+// as "0.60x the pixels").
 struct Savings {
   double ratio = 0;
   size_t points = 0;
+  size_t ties = 0;  // levels within the noise floor, counted as ratio 1
   double q_lo = 0, q_hi = 0;
 };
 Savings pixel_ratio_at_equal_q(const std::vector<std::pair<double, double>>& a,
-                               const std::vector<std::pair<double, double>>& b);
+                               const std::vector<std::pair<double, double>>& b, double noise_floor = 0);
 // The same for two curves as reports hold them: arrays of {c_r, q} by increasing c_r (an
 // eval layout's `curve`, reparam's `curve`).
-Savings pixel_ratio_at_equal_q(const nlohmann::ordered_json& a, const nlohmann::ordered_json& b);
+Savings pixel_ratio_at_equal_q(const nlohmann::ordered_json& a, const nlohmann::ordered_json& b,
+                               double noise_floor = 0);
 
 }  // namespace uvpress::eval

@@ -273,6 +273,22 @@ TEST_CASE("savings: a curve reaching every q at half the cost saves half the pix
   CHECK(t.ratio == Approx(2.0).epsilon(1e-9));
   std::vector<std::pair<double, double>> far = {{0.1, 1e-6}, {0.2, 1e-7}};
   CHECK(eval::pixel_ratio_at_equal_q(far, b).points == 0);
+  // A nearly flat curve (q 1.0e-3 .. 0.9e-3) a hair below another: equal-q costs say "a
+  // third of the pixels", but the two never differ by more than the noise floor (2e-5):
+  // every level is a tie and the ratio is 1. With a smaller floor the ratio stands.
+  std::vector<std::pair<double, double>> flat_b, flat_a;
+  for (double c : {0.2, 0.4, 0.6, 0.8}) flat_b.push_back({c, 1.0e-3 - 1.25e-4 * c}), flat_a.push_back({c, 0.99e-3 - 1.25e-4 * c});
+  auto naive = eval::pixel_ratio_at_equal_q(flat_a, flat_b);
+  REQUIRE(naive.points >= 2);
+  CHECK(naive.ratio < 0.95);
+  auto floored = eval::pixel_ratio_at_equal_q(flat_a, flat_b, 2e-5);
+  CHECK(floored.points == naive.points);
+  CHECK(floored.ties == floored.points);
+  CHECK(floored.ratio == Approx(1.0));
+  CHECK(eval::pixel_ratio_at_equal_q(flat_a, flat_b, 1e-6).ties == 0);
+  CHECK(eval::pixel_ratio_at_equal_q(flat_a, flat_b, 1e-6).ratio == Approx(naive.ratio));
+  // Far apart curves are untouched by a floor well below their gap.
+  CHECK(eval::pixel_ratio_at_equal_q(a, b, 1e-4).ratio == Approx(0.5).epsilon(1e-9));
 }
 
 TEST_CASE("eval: a layout against itself at c_r = 1 gives q = 0; q_r falls as c_r rises", "[eval]") {

@@ -93,8 +93,11 @@ void add_bench_quality(CLI::App& bench, Globals& g) {
           for (const auto& L : ev["layouts"]) {
             const std::string name = L["name"];
             if (name != "input" && name != "flatten") continue;
-            const auto s = eval::pixel_ratio_at_equal_q(report["curve"], L["curve"]);
+            // Levels where the two curves are within eval's noise floor count as ties (1).
+            const double floor = ev["noise_floor"].is_number() ? ev["noise_floor"].get<double>() : 0.0;
+            const auto s = eval::pixel_ratio_at_equal_q(report["curve"], L["curve"], floor);
             const std::string key = name == "input" ? "ratio_vs_resize" : "ratio_vs_isometric";
+            line[key + "_ties"] = s.ties, line["noise_floor"] = floor;
             if (s.points) line[key] = s.ratio;
             else line[key] = nullptr, why += "reparam's curve and " + name + "'s share no q range; ";
           }

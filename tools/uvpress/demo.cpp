@@ -80,8 +80,12 @@ void add_demo(CLI::App& app, Globals& g) {
       // written) against the input's resize curve, both at eval's resolution.
       nlohmann::ordered_json verdict = nullptr;
       if (report.contains("curve")) {
-        const auto sv = eval::pixel_ratio_at_equal_q(report["curve"], evaluation["layouts"][0]["curve"]);
-        if (sv.points) {
+        const double floor = evaluation["noise_floor"].is_number() ? evaluation["noise_floor"].get<double>() : 0.0;
+        const auto sv = eval::pixel_ratio_at_equal_q(report["curve"], evaluation["layouts"][0]["curve"], floor);
+        if (sv.points && sv.ties == sv.points) {
+          verdict = sv.ratio;
+          std::printf("demo: reparam and a plain resize look the same at equal pixels (within eval's noise floor, q %.2g)\n", floor);
+        } else if (sv.points) {
           verdict = sv.ratio;
           if (sv.ratio <= 1)
             std::printf("demo: reparam saves %.0f%% of the pixels of a plain resize at equal quality\n", 100 * (1 - sv.ratio));
