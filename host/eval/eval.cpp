@@ -285,12 +285,9 @@ struct Setup {
 // Mean GMSD of `m` textured with `texture` against the reference views (per view in
 // *per_view): the one place eval turns a texture into q. The noise floor passes cameras
 // and reference views of its own (shifted by a fraction of a pixel).
-double score_views(engine::Engine& engine, const Setup& s, const LayoutMesh& m, const Image& texture, Timing& timing,
+double score_views(engine::Engine& engine, const Setup& s, const LayoutMesh& m, const Texture& tex, Timing& timing,
                    std::vector<float>* per_view = nullptr, const std::vector<std::array<float, 16>>* cameras = nullptr,
                    const std::vector<float>* ref_views = nullptr) {
-  const auto t0 = std::chrono::steady_clock::now();
-  const Texture tex = view_texture(texture, s.filter);
-  timing.textures += seconds_since(t0);
   const uint32_t res = s.resolution.resolution;
   const size_t n = size_t(res) * res;
   const float* ref = (ref_views ? *ref_views : s.ref_views).data();
@@ -305,13 +302,22 @@ double score_views(engine::Engine& engine, const Setup& s, const LayoutMesh& m, 
   return q;
 }
 
-// Every view of `m` textured with `texture`, res x res luminance each, view after view.
-std::vector<float> luminance_views(engine::Engine& engine, const LayoutMesh& m, const Image& texture,
-                                   const std::vector<std::array<float, 16>>& cameras, uint32_t res,
-                                   TextureFilter filter, Timing& timing) {
+// `image` as the views sample it (view_texture), timed.
+Texture timed_view_texture(const Image& image, TextureFilter filter, Timing& timing) {
   const auto t0 = std::chrono::steady_clock::now();
-  const Texture tex = view_texture(texture, filter);
+  Texture tex = view_texture(image, filter);
   timing.textures += seconds_since(t0);
+  return tex;
+}
+
+double score_views(engine::Engine& engine, const Setup& s, const LayoutMesh& m, const Image& texture, Timing& timing,
+                   std::vector<float>* per_view = nullptr) {
+  return score_views(engine, s, m, timed_view_texture(texture, s.filter, timing), timing, per_view);
+}
+
+// Every view of `m` textured with `tex`, res x res luminance each, view after view.
+std::vector<float> luminance_views(engine::Engine& engine, const LayoutMesh& m, const Texture& tex,
+                                   const std::vector<std::array<float, 16>>& cameras, uint32_t res, Timing& timing) {
   std::vector<float> out(cameras.size() * res * res);
   render_views(engine, m, tex, cameras, res, timing, [&](size_t first, size_t views, const float* px) {
     std::copy(px, px + views * res * res, out.data() + first * res * res);
@@ -421,14 +427,15 @@ Setup set_up(const io::GltfFile& reference, engine::Engine& engine, const EvalOp
   for (int d = 0; d < 3; ++d) s.radius = std::max(s.radius, hi[d] - lo[d]);
   s.resolution = choose_resolution(engine, ref, s.cameras, o, timing);
   const uint32_t res = s.resolution.resolution;
-  s.ref_views = luminance_views(engine, ref, ref.full, s.cameras, res, s.filter, timing);
+  const Texture ref_tex = timed_view_texture(ref.full, s.filter, timing);
+  s.ref_views = luminance_views(engine, ref, ref_tex, s.cameras, res, timing);
   if (o.noise_floor) {
     // How far q moves when only the sampling phase does: the input resized to half its
     // texels (Lanczos-3) scored as usual, again with the cameras and the reference views
     // shifted by a quarter pixel (two directions), and resized to 1, 2 and 3 texels more a
     // side; the largest change. Differences between layouts below it are not claimed.
     auto [W, H] = size_at(0.5, s.image_texels, double(ref.full.width) / ref.full.height);
-    const Image half = resize_lanczos3(ref.full, W, H, false);
+    const Texture half = timed_view_texture(resize_lanczos3(ref.full, W, H, false), s.filter, timing);
     const double q = score_views(engine, s, ref, half, timing);
     for (const double dy : {0.25, -0.25}) {
       auto jittered = s.cameras;
@@ -438,7 +445,7 @@ Setup set_up(const io::GltfFile& reference, engine::Engine& engine, const EvalOp
           m[size_t(c)] = float(double(m[size_t(c)]) + sx * double(m[size_t(12 + c)]));
           m[size_t(4 + c)] = float(double(m[size_t(4 + c)]) + sy * double(m[size_t(12 + c)]));
         }
-      const auto ref_jittered = luminance_views(engine, ref, ref.full, jittered, res, s.filter, timing);
+      const auto ref_jittered = luminance_views(engine, ref, ref_tex, jittered, res, timing);
       const double qj = score_views(engine, s, ref, half, timing, nullptr, &jittered, &ref_jittered);
       s.resolution.noise_floor = std::max(s.resolution.noise_floor, std::abs(qj - q));
     }
