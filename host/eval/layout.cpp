@@ -3,6 +3,7 @@
 
 #include "atlas/charts.h"
 #include "core/error.h"
+#include "core/stopwatch.h"
 #include "flatten/flatten.h"
 #include "io/asset.h"
 #include "io/image_io.h"
@@ -15,7 +16,6 @@
 #endif
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <map>
 #include <numeric>
@@ -210,7 +210,7 @@ Image rebake_from(const LayoutMesh& ref, const LayoutMesh& target, uint32_t W, u
 }
 
 std::vector<float> isometric_uvs(const LayoutMesh& ref, double* aspect, nlohmann::ordered_json* info) {
-  const auto t0 = std::chrono::steady_clock::now();
+  const Stopwatch t0;
   Mesh welded = atlas::weld_uv_mesh(ref.positions.data(), ref.uvs.data(), ref.positions.size() / 3, ref.indices.data(),
                                     ref.indices.size());
   atlas::Charts charts = atlas::find_charts(welded);
@@ -298,7 +298,7 @@ std::vector<float> isometric_uvs(const LayoutMesh& ref, double* aspect, nlohmann
     *info = {{"charts", charts.count},
              {"flattened", flattened},
              {"kept_input_uvs", kept},
-             {"seconds", std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count()}};
+             {"seconds", t0.seconds()}};
   return out;
 }
 

@@ -1,11 +1,11 @@
 #include "perceptual/mesh_stage.h"
 
+#include "core/stopwatch.h"
 #include "flatten/line_search.h"
 #include "flatten/sparse_system.h"
 #include "flatten/symmetric_dirichlet.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <limits>
 #include <memory>
@@ -17,14 +17,6 @@ namespace {
 
 using flatten::worth_threads;
 constexpr double kInf = std::numeric_limits<double>::infinity();
-
-using Clock = std::chrono::steady_clock;
-double lap(Clock::time_point& t) {
-  const auto now = Clock::now();
-  const double s = std::chrono::duration<double>(now - t).count();
-  t = now;
-  return s;
-}
 
 // 2x2 matrices as 4 doubles, row-major (a b / c d).
 inline void mul(const double* A, const double* B, double* C) {
@@ -256,13 +248,13 @@ class MeshStage {
   // every CG iterate is a descent direction.
   void global_step(std::vector<double>& uv, MeshStageResult& res) {
     const long n = long(g_.size());
-    auto clock = Clock::now();
+    Stopwatch clock;
     if (!base_ready_) {
       system_.assemble(base21_);
       base_ok_ = system_.factorize();
       base_ready_ = true;
       ++res.factorizations;
-      res.t_factorization += lap(clock);
+      res.t_factorization += clock.lap();
       if (!base_ok_) fail(res, "fit matrix: " + system_.failure());
     }
     if (!base_ok_) return;  // no step: the input stays (flip-free)
@@ -285,7 +277,7 @@ class MeshStage {
         active += on;
       }
       system_.gather_gradient(grad6_, grad_);
-      res.t_derivatives += lap(clock);
+      res.t_derivatives += clock.lap();
       if (active == 0) {
         system_.solve(grad_, dir_);
       } else if (active <= kFewActive) {
@@ -303,22 +295,22 @@ class MeshStage {
             hess21_[21 * size_t(a) + size_t(k)] =
                 base21_[21 * size_t(a) + size_t(k)] + (active_[size_t(a)] ? bar21_[21 * size_t(a) + size_t(k)] : 0.0);
         full_->assemble(hess21_);
-        res.t_derivatives += lap(clock);
+        res.t_derivatives += clock.lap();
         ++res.factorizations;
         const bool ok = full_->factorize();
-        res.t_factorization += lap(clock);
+        res.t_factorization += clock.lap();
         if (!ok) {
           fail(res, "full Hessian (" + std::to_string(active) + " active barriers): " + full_->failure());
           break;
         }
         full_->solve(grad_, dir_);
       }
-      res.t_solve += lap(clock);
+      res.t_solve += clock.lap();
       double slope = 0;
       for (size_t i = 0; i < dir_.size(); ++i) slope += grad_[i] * dir_[i];
       // Newton decrement: stop when the quadratic model promises (almost) nothing.
       if (!(slope < 0) || -0.5 * slope <= stop * f0) {
-        res.t_line_search += lap(clock);
+        res.t_line_search += clock.lap();
         break;
       }
       const double a_max = flatten::max_injective_step(g_.tris, uv, dir_);
@@ -326,14 +318,14 @@ class MeshStage {
       const auto ls = flatten::armijo(uv, dir_, f0, slope, a0, F);
       ++res.newton_steps;
       const bool exact = active == 0 && ls.step == 1 && barrier_energy(uv) == 0;  // minimizer of the quadratic
-      res.t_line_search += lap(clock);
+      res.t_line_search += clock.lap();
       if (ls.step == 0 || exact || f0 - ls.energy <= stop * f0) break;
     }
     // Eq. 28 at the new uv.
     double e_rs = 0, e_bar = 0;
     global_energy_active(g_, T_, tg_.threshold, o_.w_rs, w_b_, uv, scratch_, &e_rs, &e_bar);
     if (e_rs < e_bar) w_b_ /= o_.barrier_shrink;
-    res.t_line_search += lap(clock);
+    res.t_line_search += clock.lap();
   }
 
   double w_b() const { return w_b_; }
@@ -537,9 +529,9 @@ MeshStageResult fit_chart(const std::vector<double>& uv, const std::vector<uint3
       x = uv;
       break;
     }
-    auto clock = Clock::now();
+    Stopwatch clock;
     stage.local_step(x, true);
-    res.t_local += lap(clock);
+    res.t_local += clock.lap();
     e19 = stage.energy19();
     const double next = e19 + stage.barrier_energy(x);
     res.objective_history.push_back(next);
