@@ -1,5 +1,6 @@
 #include "perceptual/mesh_stage.h"
 
+#include "core/mat2.h"
 #include "core/stopwatch.h"
 #include "flatten/line_search.h"
 #include "flatten/sparse_system.h"
@@ -17,27 +18,6 @@ namespace {
 
 using flatten::worth_threads;
 constexpr double kInf = std::numeric_limits<double>::infinity();
-
-// 2x2 matrices as 4 doubles, row-major (a b / c d).
-inline void mul(const double* A, const double* B, double* C) {
-  const double c0 = A[0] * B[0] + A[1] * B[2], c1 = A[0] * B[1] + A[1] * B[3];
-  const double c2 = A[2] * B[0] + A[3] * B[2], c3 = A[2] * B[1] + A[3] * B[3];
-  C[0] = c0, C[1] = c1, C[2] = c2, C[3] = c3;
-}
-inline double dist2(const double* A, const double* B) {
-  const double a = A[0] - B[0], b = A[1] - B[1], c = A[2] - B[2], d = A[3] - B[3];
-  return a * a + b * b + c * c + d * d;
-}
-inline double det(const double* A) { return A[0] * A[3] - A[1] * A[2]; }
-// Closest rotation to M (maximizes tr(R^T M)); the identity when M has no rotational part.
-inline void polar(const double* M, double* R) {
-  const double c = M[0] + M[3], s = M[2] - M[1], n = std::hypot(c, s);
-  if (!(n > 0) || !std::isfinite(n)) {
-    R[0] = 1, R[1] = 0, R[2] = 0, R[3] = 1;
-    return;
-  }
-  R[0] = c / n, R[1] = -s / n, R[2] = s / n, R[3] = c / n;
-}
 
 // Per-triangle data of the local step (indices of active triangles).
 struct Targets {
@@ -80,7 +60,7 @@ Geometry make_geometry(const std::vector<double>& uv0, const std::vector<uint32_
 inline bool triangle_terms(const Geometry& g, size_t a, const double* uv, const double* T, double s, double& fit,
                            double& bar) {
   double J[4];
-  flatten::jacobian(&g.rinv[4 * a], uv, &g.tris[3 * a], J);
+  jacobian(&g.rinv[4 * a], uv, &g.tris[3 * a], J);
   fit = dist2(J, T);
   bar = detail::barrier(det(J), s);
   return std::isfinite(bar);
@@ -114,7 +94,7 @@ inline bool triangle_derivatives(const Geometry& g, size_t a, const double* uv, 
                                  double w_rs, double w_b, double* grad6, double* bar21) {
   double J[4];
   const double* Ri = &g.rinv[4 * a];
-  flatten::jacobian(Ri, uv, &g.tris[3 * a], J);
+  jacobian(Ri, uv, &g.tris[3 * a], J);
   double d1 = 0, d2 = 0;
   detail::barrier(det(J), s, &d1, &d2);
   const bool active = d1 != 0 || d2 != 0;
@@ -190,7 +170,7 @@ class MeshStage {
     for (long ai = 0; ai < n; ++ai) {
       const size_t a = size_t(ai);
       double J[4];
-      flatten::jacobian(&g_.rinv[4 * a], uv.data(), &g_.tris[3 * a], J);
+      jacobian(&g_.rinv[4 * a], uv.data(), &g_.tris[3 * a], J);
       const double* Rb = &tg_.rotation[4 * a];
       const double* Sb = &tg_.stretch[4 * a];
       const double wR = tg_.wR[a], wS = tg_.wS[a];
@@ -547,7 +527,7 @@ MeshStageResult fit_chart(const std::vector<double>& uv, const std::vector<uint3
     const size_t t = g.index[a];
     res.k[t] = stage.k()[a];
     double J[4];
-    flatten::jacobian(&g.rinv[4 * a], x.data(), &g.tris[3 * a], J);
+    jacobian(&g.rinv[4 * a], x.data(), &g.tris[3 * a], J);
     std::copy(J, J + 4, &res.jacobian[4 * t]);
     if (!(det(J) > 0)) ++res.flips;
   }
