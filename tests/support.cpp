@@ -102,4 +102,11 @@ nlohmann::json validate_gltf(const fs::path& file) {
   return nlohmann::json::parse(r.out);
 }
 
+std::unique_ptr<engine::Engine> lavapipe(uint64_t max_buffer_bytes) {
+  engine::EngineOptions o;
+  o.validation = true;
+  o.max_buffer_bytes = max_buffer_bytes;
+  return engine::make_vulkan_engine(engine::DeviceRequest::Lavapipe, o);
+}
+
 }  // namespace uvpress::test

@@ -1,10 +1,13 @@
 // Test helpers: where the shared assets are, running the uvpress binary and the Khronos
-// validator as a user would, and scratch folders.
+// validator as a user would, scratch folders, and the Vulkan engine on lavapipe.
 #pragma once
+
+#include "engine.h"
 
 #include <nlohmann/json.hpp>
 
 #include <filesystem>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -48,6 +51,10 @@ void check_input_error(const Scratch& dir, const std::string& args, const fs::pa
 // The Khronos validator's summary of a .gltf/.glb: {"numErrors", "errors": {code: n}}.
 nlohmann::json validate_gltf(const fs::path& file);
 
+// Vulkan on lavapipe with the validation layer on; max_buffer_bytes 0 keeps the engine's
+// default. Throws engine::EngineError when this machine has no lavapipe.
+std::unique_ptr<engine::Engine> lavapipe(uint64_t max_buffer_bytes = 0);
+
 }  // namespace uvpress::test
 
 // Catch2 v2 has no SKIP: say why and leave the test case.
@@ -56,3 +63,12 @@ nlohmann::json validate_gltf(const fs::path& file);
     WARN("skipped: " << (why));        \
     return;                            \
   } while (0)
+
+// `var`: lavapipe(...) as above, or, where this machine has none, skip the test case saying why.
+#define UVPRESS_LAVAPIPE_OR_SKIP(var, ...)                           \
+  std::unique_ptr<::uvpress::engine::Engine> var;                    \
+  try {                                                              \
+    var = ::uvpress::test::lavapipe(__VA_ARGS__);                    \
+  } catch (const ::uvpress::engine::EngineError& e) {                \
+    UVPRESS_SKIP(std::string("no lavapipe: ") + e.what());           \
+  }

@@ -1,12 +1,12 @@
 #include "atlas/rebake.h"
 
 #include "atlas/pack.h"
+#include "core/stopwatch.h"
 
 #include <omp.h>
 
 #include <algorithm>
 #include <array>
-#include <chrono>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -268,13 +268,13 @@ Image rebake(const Image& source, const std::vector<RebakeMesh>& meshes, const R
   // The footprints, filtered on the engine (or the CPU kernel): straight colour, linear.
   const engine::RebakeTexelsDesc desc = plan.desc(opt);
   std::vector<float> filtered(size_t(W) * H * C, 0.0f);
-  const auto t_sample = std::chrono::steady_clock::now();
+  const Stopwatch t_sample;
   if (engine) {
     engine->rebake_texels(desc, filtered.data());
   } else {
     engine::rebake_texels_cpu(desc, filtered.data(), unsigned(std::max(1, omp_get_max_threads())));
   }
-  const double sample_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_sample).count();
+  const double sample_seconds = t_sample.seconds();
 
   Image out;
   out.width = opt.width, out.height = opt.height, out.channels = source.channels, out.bits = source.bits;

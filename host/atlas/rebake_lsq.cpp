@@ -1,9 +1,10 @@
 #include "atlas/rebake_lsq.h"
 
+#include "core/stopwatch.h"
+
 #include <omp.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <stdexcept>
 #include <vector>
@@ -42,13 +43,13 @@ constexpr double kWeak = 4.0;
 
 Image rebake_least_squares(const Image& source, const std::vector<RebakeMesh>& meshes, const RebakeOptions& opt,
                            const Image& area, LsqBakeStats* stats, const LsqBakeOptions& lsq) {
-  const auto t_start = std::chrono::steady_clock::now();
+  const Stopwatch t_start;
   if (area.width != opt.width || area.height != opt.height || area.channels != source.channels ||
       area.pixels.size() != size_t(area.width) * area.height * area.channels)
     throw std::invalid_argument("rebake_least_squares: the area-filtered bake does not match the options and source");
   LsqBakeStats st;
   auto finish = [&](Image&& img) {
-    st.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
+    st.seconds = t_start.seconds();
     if (stats) *stats = st;
     return std::move(img);
   };

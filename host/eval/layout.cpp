@@ -2,20 +2,14 @@
 #include "layout.h"
 
 #include "atlas/charts.h"
+#include "atlas/rebake.h"
 #include "core/error.h"
+#include "core/stopwatch.h"
 #include "flatten/flatten.h"
 #include "io/asset.h"
 #include "io/image_io.h"
 
-#if __has_include("atlas/rebake.h")
-#include "atlas/rebake.h"
-#define UVPRESS_EVAL_HAVE_REBAKE 1
-#else
-#define UVPRESS_EVAL_HAVE_REBAKE 0
-#endif
-
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <map>
 #include <numeric>
@@ -111,79 +105,6 @@ bool same_triangles(const LayoutMesh& a, const LayoutMesh& b, double tol) {
   return true;
 }
 
-namespace {
-
-// Plain bake: texel centres inside a new-UV triangle take the bilinear sample of the
-// source at the barycentric old UV; then 16 rounds of dilation fill the gutter.
-[[maybe_unused]] Image simple_bake(const LayoutMesh& ref, const std::vector<float>& old_uv, const std::vector<float>& new_uv,
-                  uint32_t W, uint32_t H) {
-  const Image& src = ref.full;
-  Image out;
-  out.width = W, out.height = H, out.channels = 3, out.bits = src.bits;
-  out.pixels.assign(size_t(W) * H * 3, 0.0f);
-  std::vector<uint8_t> covered(size_t(W) * H, 0);
-  auto sample = [&](double u, double v, float* rgb) {
-    double s = u * src.width - 0.5, t = v * src.height - 0.5;
-    const int w = int(src.width), h = int(src.height);
-    auto fetch = [&](int i, int j, int c) {
-      if (ref.repeat) i = ((i % w) + w) % w, j = ((j % h) + h) % h;
-      else i = std::clamp(i, 0, w - 1), j = std::clamp(j, 0, h - 1);
-      return src.pixels[(size_t(j) * src.width + size_t(i)) * 3 + size_t(c)];
-    };
-    const double fs0 = std::floor(s), ft0 = std::floor(t), fs = s - fs0, ft = t - ft0;
-    for (int c = 0; c < 3; ++c)
-      rgb[c] = float((1 - ft) * ((1 - fs) * fetch(int(fs0), int(ft0), c) + fs * fetch(int(fs0) + 1, int(ft0), c)) +
-                     ft * ((1 - fs) * fetch(int(fs0), int(ft0) + 1, c) + fs * fetch(int(fs0) + 1, int(ft0) + 1, c)));
-  };
-  for (size_t t = 0; t < new_uv.size() / 6; ++t) {
-    double x[3], y[3];
-    for (int k = 0; k < 3; ++k) x[k] = new_uv[6 * t + 2 * size_t(k)] * W, y[k] = new_uv[6 * t + 2 * size_t(k) + 1] * H;
-    const double det = (x[1] - x[0]) * (y[2] - y[0]) - (x[2] - x[0]) * (y[1] - y[0]);
-    if (std::abs(det) < 1e-12) continue;
-    const int i0 = std::max(0, int(std::floor(std::min({x[0], x[1], x[2]})))),
-              i1 = std::min(int(W) - 1, int(std::ceil(std::max({x[0], x[1], x[2]}))));
-    const int j0 = std::max(0, int(std::floor(std::min({y[0], y[1], y[2]})))),
-              j1 = std::min(int(H) - 1, int(std::ceil(std::max({y[0], y[1], y[2]}))));
-    for (int j = j0; j <= j1; ++j)
-      for (int i = i0; i <= i1; ++i) {
-        const double px = i + 0.5, py = j + 0.5;
-        const double b1 = ((px - x[0]) * (y[2] - y[0]) - (x[2] - x[0]) * (py - y[0])) / det;
-        const double b2 = ((x[1] - x[0]) * (py - y[0]) - (px - x[0]) * (y[1] - y[0])) / det;
-        const double b0 = 1 - b1 - b2;
-        if (b0 < -1e-9 || b1 < -1e-9 || b2 < -1e-9) continue;
-        const double u = b0 * old_uv[6 * t] + b1 * old_uv[6 * t + 2] + b2 * old_uv[6 * t + 4];
-        const double v = b0 * old_uv[6 * t + 1] + b1 * old_uv[6 * t + 3] + b2 * old_uv[6 * t + 5];
-        const size_t p = size_t(j) * W + size_t(i);
-        sample(u, v, &out.pixels[3 * p]);
-        covered[p] = 1;
-      }
-  }
-  for (int round = 0; round < 16; ++round) {
-    std::vector<uint8_t> next = covered;
-    for (uint32_t j = 0; j < H; ++j)
-      for (uint32_t i = 0; i < W; ++i) {
-        const size_t p = size_t(j) * W + i;
-        if (covered[p]) continue;
-        float sum[3] = {0, 0, 0};
-        int n = 0;
-        const int di[4] = {-1, 1, 0, 0}, dj[4] = {0, 0, -1, 1};
-        for (int k = 0; k < 4; ++k) {
-          const int a = int(i) + di[k], b = int(j) + dj[k];
-          if (a < 0 || b < 0 || a >= int(W) || b >= int(H) || !covered[size_t(b) * W + size_t(a)]) continue;
-          for (int c = 0; c < 3; ++c) sum[c] += out.pixels[3 * (size_t(b) * W + size_t(a)) + size_t(c)];
-          ++n;
-        }
-        if (!n) continue;
-        for (int c = 0; c < 3; ++c) out.pixels[3 * p + size_t(c)] = sum[c] / float(n);
-        next[p] = 1;
-      }
-    covered.swap(next);
-  }
-  return out;
-}
-
-}  // namespace
-
 Image rebake_from(const LayoutMesh& ref, const LayoutMesh& target, uint32_t W, uint32_t H, std::string* method) {
   // Corner-expanded UV arrays: triangle t of `target` is triangle t of `ref`.
   std::vector<float> old_uv(2 * ref.indices.size()), new_uv(2 * ref.indices.size());
@@ -191,7 +112,6 @@ Image rebake_from(const LayoutMesh& ref, const LayoutMesh& target, uint32_t W, u
     for (int d = 0; d < 2; ++d)
       old_uv[2 * k + size_t(d)] = ref.uvs[2 * size_t(ref.indices[k]) + size_t(d)],
       new_uv[2 * k + size_t(d)] = target.uvs[2 * size_t(target.indices[k]) + size_t(d)];
-#if UVPRESS_EVAL_HAVE_REBAKE
   std::vector<uint32_t> corners(ref.indices.size());
   std::iota(corners.begin(), corners.end(), 0u);
   atlas::RebakeMesh mesh;
@@ -203,14 +123,10 @@ Image rebake_from(const LayoutMesh& ref, const LayoutMesh& target, uint32_t W, u
   o.wrap_s = o.wrap_t = ref.repeat ? atlas::kWrapRepeat : atlas::kWrapClampToEdge;
   if (method) *method = "atlas::rebake";
   return atlas::rebake(ref.full, {mesh}, o);
-#else
-  if (method) *method = "bilinear bake, dilated gutter";
-  return simple_bake(ref, old_uv, new_uv, W, H);
-#endif
 }
 
 std::vector<float> isometric_uvs(const LayoutMesh& ref, double* aspect, nlohmann::ordered_json* info) {
-  const auto t0 = std::chrono::steady_clock::now();
+  const Stopwatch t0;
   Mesh welded = atlas::weld_uv_mesh(ref.positions.data(), ref.uvs.data(), ref.positions.size() / 3, ref.indices.data(),
                                     ref.indices.size());
   atlas::Charts charts = atlas::find_charts(welded);
@@ -298,7 +214,7 @@ std::vector<float> isometric_uvs(const LayoutMesh& ref, double* aspect, nlohmann
     *info = {{"charts", charts.count},
              {"flattened", flattened},
              {"kept_input_uvs", kept},
-             {"seconds", std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count()}};
+             {"seconds", t0.seconds()}};
   return out;
 }
 

@@ -38,7 +38,7 @@ double area3d(const std::vector<float>& positions, const std::vector<uint32_t>& 
 bool same_triangles(const LayoutMesh& a, const LayoutMesh& b, double tolerance);
 
 // The reference texture re-baked into `target`'s UVs (triangles corresponding one to one
-// with `reference`'s) at width x height. Uses atlas::rebake when the tree has it.
+// with `reference`'s) at width x height, by atlas::rebake; `method` names it for reports.
 Image rebake_from(const LayoutMesh& reference, const LayoutMesh& target, uint32_t width, uint32_t height,
                   std::string* method = nullptr);
 

@@ -13,6 +13,7 @@
 // iteration. The mesh is scaled to area 1, so E = E/|M| = the paper's E_c at convergence.
 #include "flatten/flatten.h"
 
+#include "core/stopwatch.h"
 #include "flatten/disk_topology.h"
 #include "flatten/progressive.h"
 #include "flatten/solver.h"
@@ -20,7 +21,6 @@
 #include "flatten/tutte.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 
@@ -85,8 +85,6 @@ size_t count_flips(const std::vector<uint32_t>& tris, const std::vector<double>&
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
-
 // The true distortion of every triangle (relative to the ideal references).
 struct Analysis {
   double energy = 0, max_distortion = 0, fraction_bounded = 0;
@@ -122,7 +120,7 @@ void analyze(const Problem& p, const std::vector<double>& uv, const std::vector<
 }  // namespace
 
 Result flatten(const Mesh& mesh, const Options& o) {
-  const auto start = Clock::now();
+  const Stopwatch start;
   for (double x : mesh.positions)
     if (!std::isfinite(x)) throw FlattenError("non-finite vertex coordinate");
   DiskTopology topo = check_disk(mesh.triangles, mesh.vertex_count());
@@ -146,8 +144,8 @@ Result flatten(const Mesh& mesh, const Options& o) {
   Analysis a;
   analyze(p, uv, area_w, o.K, a);
   r.initial_energy = a.energy;
-  const auto iterations_start = Clock::now();
-  r.init_seconds = std::chrono::duration<double>(iterations_start - start).count();
+  r.init_seconds = start.seconds();
+  const Stopwatch loop;
 
   const bool progressive = o.method == Method::Progressive || o.method == Method::PCm;
   bool in_progressive = progressive;
@@ -156,7 +154,7 @@ Result flatten(const Mesh& mesh, const Options& o) {
   std::vector<double> ref;
   r.stop = StopReason::MaxIterations;
   for (int it = 1; it <= o.max_iterations; ++it) {
-    auto clock = Clock::now();
+    const Stopwatch clock;
     double t_com = 1;
     if (in_progressive) {
       t_com = common_parameter(a.J, a.D, o.K);
@@ -165,7 +163,7 @@ Result flatten(const Mesh& mesh, const Options& o) {
     if (slim && o.method != Method::Slim && (a.fraction_bounded >= 0.99 || e_n < 0.1)) slim = false;
     if (in_progressive) progressive_references(p.ideal, a.J, t_com, ref);
     else t_com = 1;
-    const double t_reference = std::chrono::duration<double>(Clock::now() - clock).count();
+    const double t_reference = clock.seconds();
 
     StepStats s = solver.step(uv, in_progressive ? ref : p.ideal, in_progressive ? uniform_w : area_w,
                               slim ? Proxy::Slim : Proxy::Cm, in_progressive ? 0.0 : o.gradient_tolerance);
@@ -195,7 +193,7 @@ Result flatten(const Mesh& mesh, const Options& o) {
       }
       break;
     }
-    auto t_analyze = Clock::now();
+    const Stopwatch t_analyze;
     const double before = a.energy;
     analyze(p, uv, area_w, o.K, a);
     e_n = std::abs(before - a.energy) / a.energy;
@@ -212,10 +210,10 @@ Result flatten(const Mesh& mesh, const Options& o) {
     rec.gradient_norm = s.gradient_norm;
     rec.objective_before = s.energy_before, rec.objective_after = s.energy_after;
     rec.inverted = a.inverted;
-    rec.t_gradient = s.t_gradient + t_reference + std::chrono::duration<double>(Clock::now() - t_analyze).count();
+    rec.t_gradient = s.t_gradient + t_reference + t_analyze.seconds();
     rec.t_assembly = s.t_assembly, rec.t_factorization = s.t_factorization, rec.t_solve = s.t_solve;
     rec.t_line_search = s.t_line_search;
-    rec.t_total = std::chrono::duration<double>(Clock::now() - clock).count();
+    rec.t_total = clock.seconds();
     r.log.push_back(rec);
     r.iterations = it;
     if (o.on_iteration) o.on_iteration(rec);
@@ -226,7 +224,7 @@ Result flatten(const Mesh& mesh, const Options& o) {
   }
   r.converged = is_convergence(r.stop);
   r.stop_reason = to_string(r.stop);
-  r.seconds = std::chrono::duration<double>(Clock::now() - iterations_start).count();
+  r.seconds = loop.seconds();
   r.energy = a.energy;
   r.max_distortion = a.max_distortion;
   r.eta = r.iterations;

@@ -1,24 +1,14 @@
 #include "flatten/solver.h"
 
+#include "core/stopwatch.h"
 #include "flatten/composite_majorization.h"
 #include "flatten/line_search.h"
 #include "flatten/slim.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 
 namespace uvpress::flatten {
-
-namespace {
-using Clock = std::chrono::steady_clock;
-double since(Clock::time_point& t) {
-  auto now = Clock::now();
-  double s = std::chrono::duration<double>(now - t).count();
-  t = now;
-  return s;
-}
-}  // namespace
 
 Solver::Solver(const Problem& problem) : p_(problem), system_(problem.vertex_count, problem.triangles) {}
 
@@ -52,7 +42,7 @@ void Solver::gradient(const std::vector<double>& uv, const std::vector<double>& 
 StepStats Solver::step(std::vector<double>& uv, const std::vector<double>& ref, const std::vector<double>& w,
                        Proxy proxy, double gradient_tolerance) {
   StepStats s;
-  auto clock = Clock::now();
+  Stopwatch clock;
   const long nt = long(p_.triangle_count());
   grad6_.resize(6 * size_t(nt));
   hess21_.resize(21 * size_t(nt));
@@ -72,7 +62,7 @@ StepStats Solver::step(std::vector<double>& uv, const std::vector<double>& ref, 
   double gg = 0;
   for (double g : grad_) gg += g * g;
   s.gradient_norm = std::sqrt(gg);
-  s.t_gradient = since(clock);
+  s.t_gradient = clock.lap();
   if (s.gradient_norm < gradient_tolerance) {
     s.below_gradient_tolerance = true;
     s.energy_after = s.energy_before;
@@ -89,18 +79,18 @@ StepStats Solver::step(std::vector<double>& uv, const std::vector<double>& ref, 
     local_hessian(R, K, w[size_t(t)], &hess21_[21 * size_t(t)]);
   }
   system_.assemble(hess21_);
-  s.t_assembly = since(clock);
+  s.t_assembly = clock.lap();
 
   if (!system_.factorize()) {
-    s.t_factorization = since(clock);
+    s.t_factorization = clock.lap();
     s.line_search_failed = s.factorization_failed = true;
     s.failure = system_.failure().c_str();
     s.energy_after = s.energy_before;
     return s;
   }
-  s.t_factorization = since(clock);
+  s.t_factorization = clock.lap();
   system_.solve(grad_, dir_);
-  s.t_solve = since(clock);
+  s.t_solve = clock.lap();
 
   double slope = 0;
   for (size_t i = 0; i < dir_.size(); ++i) slope += grad_[i] * dir_[i];
@@ -109,7 +99,7 @@ StepStats Solver::step(std::vector<double>& uv, const std::vector<double>& ref, 
   if (!(slope < 0) || !(a0 > 0)) {  // no descent direction (cannot happen with an SPD proxy and finite data)
     s.line_search_failed = s.not_descent = true;
     s.energy_after = s.energy_before;
-    s.t_line_search = since(clock);
+    s.t_line_search = clock.lap();
     return s;
   }
   auto ls = armijo(uv, dir_, s.energy_before, slope, a0,
@@ -117,7 +107,7 @@ StepStats Solver::step(std::vector<double>& uv, const std::vector<double>& ref, 
   s.step = ls.step;
   s.energy_after = ls.energy;
   s.line_search_failed = s.no_decrease = ls.step == 0;
-  s.t_line_search = since(clock);
+  s.t_line_search = clock.lap();
   return s;
 }
 

@@ -2,11 +2,11 @@
 //   D(J) = 1/4 (|J|_F^2 + |J^-1|_F^2) = 1/4 (sigma^2 + sigma^-2 + tau^2 + tau^-2), det J > 0,
 // and +inf otherwise; its minimum 1 is reached exactly by rotations.
 //
-// A triangle's Jacobian (eq. 1) is J = P * Rinv, where P = [x1-x0, x2-x0] holds the UV
-// edges as columns (row 0: u, row 1: v) and Rinv is the inverse of the reference edge
-// matrix. Everything here works on flat arrays: 4 doubles per 2x2 matrix, row-major
-// (a b / c d), and 2 doubles per vertex for UVs (u v interleaved).
+// Jacobians (eq. 1, J = P * Rinv) and the 2x2 algebra come from core/mat2.h, on the same
+// flat arrays: 4 doubles per 2x2 matrix, row-major (a b / c d), 2 doubles per UV vertex.
 #pragma once
+
+#include "core/mat2.h"
 
 #include <cmath>
 #include <cstddef>
@@ -37,31 +37,19 @@ Problem make_problem(const std::vector<double>& positions, const std::vector<uin
 // Area weights of problem (5), with the floor above.
 std::vector<double> area_weights(const Problem& p);
 
-// J = P * Rinv for triangle (i0, i1, i2) of `uv`.
-inline void jacobian(const double* Rinv, const double* uv, const uint32_t* t, double J[4]) {
-  const double* x0 = uv + 2 * size_t(t[0]);
-  const double* x1 = uv + 2 * size_t(t[1]);
-  const double* x2 = uv + 2 * size_t(t[2]);
-  const double p00 = x1[0] - x0[0], p01 = x2[0] - x0[0], p10 = x1[1] - x0[1], p11 = x2[1] - x0[1];
-  J[0] = p00 * Rinv[0] + p01 * Rinv[2];
-  J[1] = p00 * Rinv[1] + p01 * Rinv[3];
-  J[2] = p10 * Rinv[0] + p11 * Rinv[2];
-  J[3] = p10 * Rinv[1] + p11 * Rinv[3];
-}
-
 // D(J), eq. (2): 1/4 |J|^2 (1 + 1/det^2) for 2x2 J; +inf when det J <= 0.
 inline double distortion(const double J[4]) {
-  const double det = J[0] * J[3] - J[1] * J[2];
-  if (!(det > 0)) return std::numeric_limits<double>::infinity();
+  const double dj = det(J);
+  if (!(dj > 0)) return std::numeric_limits<double>::infinity();
   const double f = J[0] * J[0] + J[1] * J[1] + J[2] * J[2] + J[3] * J[3];
-  return 0.25 * f * (1 + 1 / (det * det));
+  return 0.25 * f * (1 + 1 / (dj * dj));
 }
 
 // dD/dJ = 1/2 J (1 + 1/det^2) - 1/2 |J|^2 / det^3 * cof(J), cof(J) = (d -c / -b a).
 inline void distortion_gradient(const double J[4], double G[4]) {
-  const double det = J[0] * J[3] - J[1] * J[2];
+  const double dj = det(J);
   const double f = J[0] * J[0] + J[1] * J[1] + J[2] * J[2] + J[3] * J[3];
-  const double a = 0.5 * (1 + 1 / (det * det)), b = -0.5 * f / (det * det * det);
+  const double a = 0.5 * (1 + 1 / (dj * dj)), b = -0.5 * f / (dj * dj * dj);
   G[0] = a * J[0] + b * J[3];
   G[1] = a * J[1] - b * J[2];
   G[2] = a * J[2] - b * J[1];
@@ -74,23 +62,6 @@ inline void triangle_gradient(const double* Rinv, const double G[4], double w, d
   const double c[3][2] = {{-(Rinv[0] + Rinv[2]), -(Rinv[1] + Rinv[3])}, {Rinv[0], Rinv[1]}, {Rinv[2], Rinv[3]}};
   for (int m = 0; m < 3; ++m)
     for (int r = 0; r < 2; ++r) g[2 * m + r] = w * (G[2 * r] * c[m][0] + G[2 * r + 1] * c[m][1]);
-}
-
-// Closed-form SVD of a 2x2 matrix through its similarity / anti-similarity parts
-// (J z = alpha z + beta conj(z) in complex notation): sigma1 = |alpha| + |beta|,
-// sigma2 = |alpha| - |beta| (negative when det J < 0), U = R(phi), V = R(psi) with
-// phi = (arg alpha + arg beta)/2, psi = (arg beta - arg alpha)/2.
-struct Svd2 {
-  double s1, s2;          // sigma >= tau (tau signed)
-  double cu, su, cv, sv;  // cos/sin of phi and psi
-};
-inline Svd2 svd2(const double J[4]) {
-  const double ar = 0.5 * (J[0] + J[3]), ai = 0.5 * (J[2] - J[1]);
-  const double br = 0.5 * (J[0] - J[3]), bi = 0.5 * (J[1] + J[2]);
-  const double na = std::hypot(ar, ai), nb = std::hypot(br, bi);
-  const double ta = std::atan2(ai, ar), tb = std::atan2(bi, br);
-  const double phi = 0.5 * (ta + tb), psi = 0.5 * (tb - ta);
-  return {na + nb, na - nb, std::cos(phi), std::sin(phi), std::cos(psi), std::sin(psi)};
 }
 
 // Per-triangle loops run on OpenMP threads (static schedule) only from this size on:

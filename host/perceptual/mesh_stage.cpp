@@ -1,11 +1,12 @@
 #include "perceptual/mesh_stage.h"
 
+#include "core/mat2.h"
+#include "core/stopwatch.h"
 #include "flatten/line_search.h"
 #include "flatten/sparse_system.h"
 #include "flatten/symmetric_dirichlet.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <limits>
 #include <memory>
@@ -17,35 +18,6 @@ namespace {
 
 using flatten::worth_threads;
 constexpr double kInf = std::numeric_limits<double>::infinity();
-
-using Clock = std::chrono::steady_clock;
-double lap(Clock::time_point& t) {
-  const auto now = Clock::now();
-  const double s = std::chrono::duration<double>(now - t).count();
-  t = now;
-  return s;
-}
-
-// 2x2 matrices as 4 doubles, row-major (a b / c d).
-inline void mul(const double* A, const double* B, double* C) {
-  const double c0 = A[0] * B[0] + A[1] * B[2], c1 = A[0] * B[1] + A[1] * B[3];
-  const double c2 = A[2] * B[0] + A[3] * B[2], c3 = A[2] * B[1] + A[3] * B[3];
-  C[0] = c0, C[1] = c1, C[2] = c2, C[3] = c3;
-}
-inline double dist2(const double* A, const double* B) {
-  const double a = A[0] - B[0], b = A[1] - B[1], c = A[2] - B[2], d = A[3] - B[3];
-  return a * a + b * b + c * c + d * d;
-}
-inline double det(const double* A) { return A[0] * A[3] - A[1] * A[2]; }
-// Closest rotation to M (maximizes tr(R^T M)); the identity when M has no rotational part.
-inline void polar(const double* M, double* R) {
-  const double c = M[0] + M[3], s = M[2] - M[1], n = std::hypot(c, s);
-  if (!(n > 0) || !std::isfinite(n)) {
-    R[0] = 1, R[1] = 0, R[2] = 0, R[3] = 1;
-    return;
-  }
-  R[0] = c / n, R[1] = -s / n, R[2] = s / n, R[3] = c / n;
-}
 
 // Per-triangle data of the local step (indices of active triangles).
 struct Targets {
@@ -88,7 +60,7 @@ Geometry make_geometry(const std::vector<double>& uv0, const std::vector<uint32_
 inline bool triangle_terms(const Geometry& g, size_t a, const double* uv, const double* T, double s, double& fit,
                            double& bar) {
   double J[4];
-  flatten::jacobian(&g.rinv[4 * a], uv, &g.tris[3 * a], J);
+  jacobian(&g.rinv[4 * a], uv, &g.tris[3 * a], J);
   fit = dist2(J, T);
   bar = detail::barrier(det(J), s);
   return std::isfinite(bar);
@@ -122,7 +94,7 @@ inline bool triangle_derivatives(const Geometry& g, size_t a, const double* uv, 
                                  double w_rs, double w_b, double* grad6, double* bar21) {
   double J[4];
   const double* Ri = &g.rinv[4 * a];
-  flatten::jacobian(Ri, uv, &g.tris[3 * a], J);
+  jacobian(Ri, uv, &g.tris[3 * a], J);
   double d1 = 0, d2 = 0;
   detail::barrier(det(J), s, &d1, &d2);
   const bool active = d1 != 0 || d2 != 0;
@@ -198,7 +170,7 @@ class MeshStage {
     for (long ai = 0; ai < n; ++ai) {
       const size_t a = size_t(ai);
       double J[4];
-      flatten::jacobian(&g_.rinv[4 * a], uv.data(), &g_.tris[3 * a], J);
+      jacobian(&g_.rinv[4 * a], uv.data(), &g_.tris[3 * a], J);
       const double* Rb = &tg_.rotation[4 * a];
       const double* Sb = &tg_.stretch[4 * a];
       const double wR = tg_.wR[a], wS = tg_.wS[a];
@@ -256,13 +228,13 @@ class MeshStage {
   // every CG iterate is a descent direction.
   void global_step(std::vector<double>& uv, MeshStageResult& res) {
     const long n = long(g_.size());
-    auto clock = Clock::now();
+    Stopwatch clock;
     if (!base_ready_) {
       system_.assemble(base21_);
       base_ok_ = system_.factorize();
       base_ready_ = true;
       ++res.factorizations;
-      res.t_factorization += lap(clock);
+      res.t_factorization += clock.lap();
       if (!base_ok_) fail(res, "fit matrix: " + system_.failure());
     }
     if (!base_ok_) return;  // no step: the input stays (flip-free)
@@ -285,7 +257,7 @@ class MeshStage {
         active += on;
       }
       system_.gather_gradient(grad6_, grad_);
-      res.t_derivatives += lap(clock);
+      res.t_derivatives += clock.lap();
       if (active == 0) {
         system_.solve(grad_, dir_);
       } else if (active <= kFewActive) {
@@ -303,22 +275,22 @@ class MeshStage {
             hess21_[21 * size_t(a) + size_t(k)] =
                 base21_[21 * size_t(a) + size_t(k)] + (active_[size_t(a)] ? bar21_[21 * size_t(a) + size_t(k)] : 0.0);
         full_->assemble(hess21_);
-        res.t_derivatives += lap(clock);
+        res.t_derivatives += clock.lap();
         ++res.factorizations;
         const bool ok = full_->factorize();
-        res.t_factorization += lap(clock);
+        res.t_factorization += clock.lap();
         if (!ok) {
           fail(res, "full Hessian (" + std::to_string(active) + " active barriers): " + full_->failure());
           break;
         }
         full_->solve(grad_, dir_);
       }
-      res.t_solve += lap(clock);
+      res.t_solve += clock.lap();
       double slope = 0;
       for (size_t i = 0; i < dir_.size(); ++i) slope += grad_[i] * dir_[i];
       // Newton decrement: stop when the quadratic model promises (almost) nothing.
       if (!(slope < 0) || -0.5 * slope <= stop * f0) {
-        res.t_line_search += lap(clock);
+        res.t_line_search += clock.lap();
         break;
       }
       const double a_max = flatten::max_injective_step(g_.tris, uv, dir_);
@@ -326,14 +298,14 @@ class MeshStage {
       const auto ls = flatten::armijo(uv, dir_, f0, slope, a0, F);
       ++res.newton_steps;
       const bool exact = active == 0 && ls.step == 1 && barrier_energy(uv) == 0;  // minimizer of the quadratic
-      res.t_line_search += lap(clock);
+      res.t_line_search += clock.lap();
       if (ls.step == 0 || exact || f0 - ls.energy <= stop * f0) break;
     }
     // Eq. 28 at the new uv.
     double e_rs = 0, e_bar = 0;
     global_energy_active(g_, T_, tg_.threshold, o_.w_rs, w_b_, uv, scratch_, &e_rs, &e_bar);
     if (e_rs < e_bar) w_b_ /= o_.barrier_shrink;
-    res.t_line_search += lap(clock);
+    res.t_line_search += clock.lap();
   }
 
   double w_b() const { return w_b_; }
@@ -537,9 +509,9 @@ MeshStageResult fit_chart(const std::vector<double>& uv, const std::vector<uint3
       x = uv;
       break;
     }
-    auto clock = Clock::now();
+    Stopwatch clock;
     stage.local_step(x, true);
-    res.t_local += lap(clock);
+    res.t_local += clock.lap();
     e19 = stage.energy19();
     const double next = e19 + stage.barrier_energy(x);
     res.objective_history.push_back(next);
@@ -555,7 +527,7 @@ MeshStageResult fit_chart(const std::vector<double>& uv, const std::vector<uint3
     const size_t t = g.index[a];
     res.k[t] = stage.k()[a];
     double J[4];
-    flatten::jacobian(&g.rinv[4 * a], x.data(), &g.tris[3 * a], J);
+    jacobian(&g.rinv[4 * a], x.data(), &g.tris[3 * a], J);
     std::copy(J, J + 4, &res.jacobian[4 * t]);
     if (!(det(J) > 0)) ++res.flips;
   }

@@ -1,9 +1,9 @@
 #include "perceptual/triangle_stage.h"
 
 #include "bo/bayes_opt.h"
+#include "core/stopwatch.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <future>
 #include <limits>
@@ -28,9 +28,6 @@ constexpr double kHermiteWeights[12] = {2.658551684356302e-07, 8.573687043587859
                                         0.003905390584629062,  8.573687043587859e-05, 2.658551684356302e-07};
 
 double barrier(double g, double eps) { return g < eps ? -std::log(eps - g) : std::numeric_limits<double>::infinity(); }
-
-using Clock = std::chrono::steady_clock;
-double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
 // One triangle's optimization state.
 struct Search {
@@ -159,7 +156,7 @@ std::vector<double> measure_triangles(engine::Engine& engine, const TriangleView
 std::vector<TriangleResult> optimize_triangles(engine::Engine& engine, const TriangleViewInput& input,
                                                const std::vector<float>& texture, const TriangleStageOptions& o,
                                                const std::vector<uint32_t>& which, TriangleStageStats* stats) {
-  const auto t_start = Clock::now();
+  const Stopwatch t_start;
   TriangleStageStats local;
   std::vector<uint32_t> all = which;
   if (all.empty())
@@ -173,14 +170,14 @@ std::vector<TriangleResult> optimize_triangles(engine::Engine& engine, const Tri
   for (size_t wave_start = 0; wave_start < all.size(); wave_start += o.wave) {
     const size_t wave_end = std::min(all.size(), wave_start + o.wave);
     std::vector<uint32_t> wave(all.begin() + long(wave_start), all.begin() + long(wave_end));
-    auto t0 = Clock::now();
+    Stopwatch t0;
     TriangleViews tv = make_triangle_views(input, o.view_size, wave, o.max_patches, o.min_texels_per_pixel);
     engine::ViewSetDesc& desc = tv.desc;
     desc.texture = texture.data(), desc.texture_width = input.texture_width, desc.texture_height = input.texture_height;
-    local.host_seconds += seconds_since(t0);
-    t0 = Clock::now();
+    local.host_seconds += t0.seconds();
+    t0.restart();
     auto views = engine.prepare_views(desc);
-    local.device_seconds += seconds_since(t0);
+    local.device_seconds += t0.seconds();
     local.views += desc.views.size();
 
     std::vector<Search> searches(wave.size());
@@ -241,29 +238,29 @@ std::vector<TriangleResult> optimize_triangles(engine::Engine& engine, const Tri
     auto score_async = [&](Batch& batch) {
       batch.scores.resize(batch.candidates.size()), batch.lattice.resize(batch.candidates.size());
       return std::async(overlap ? std::launch::async : std::launch::deferred, [&engine, &views, &batch] {
-        auto t = Clock::now();
+        Stopwatch t;
         if (!batch.candidates.empty())
           engine.score_views(*views, batch.candidates.data(), batch.candidates.size(), batch.scores.data(), nullptr,
                              batch.lattice.data());
-        return seconds_since(t);
+        return t.seconds();
       });
     };
 
     Batch batch[2];
-    t0 = Clock::now();
+    t0.restart();
     propose(halves[0], batch[0]);
-    local.host_seconds += seconds_since(t0);
+    local.host_seconds += t0.seconds();
     while (!halves[0].empty() || !halves[1].empty()) {
       for (int h = 0; h < 2; ++h) {
         // batch[h] is proposed; score it while the other half is updated and proposed.
         auto pending = score_async(batch[h]);
         local.evaluations += batch[h].start.empty() ? 0 : batch[h].start.size() - 1;
         local.view_scores += batch[h].candidates.size();
-        t0 = Clock::now();
+        t0.restart();
         const int other = 1 - h;
         if (!batch[other].candidates.empty()) update(halves[other], batch[other]);
         propose(halves[other], batch[other]);
-        local.host_seconds += seconds_since(t0);
+        local.host_seconds += t0.seconds();
         local.device_seconds += pending.get();
       }
       // Half 1's scores are applied in the next pass (as `other` of h = 0).
@@ -316,9 +313,9 @@ std::vector<TriangleResult> optimize_triangles(engine::Engine& engine, const Tri
       }
     }
     std::vector<float> weight_scores(weight_batch.size());
-    t0 = Clock::now();
+    t0.restart();
     engine.score_views(*views, weight_batch.data(), weight_batch.size(), weight_scores.data());
-    local.device_seconds += seconds_since(t0);
+    local.device_seconds += t0.seconds();
     local.view_scores += weight_batch.size();
     size_t at = 0;
     for (size_t k = 0; k < searches.size(); ++k) {
@@ -330,7 +327,7 @@ std::vector<TriangleResult> optimize_triangles(engine::Engine& engine, const Tri
       results[wave_start + k].weight_stretch = variance(str);
     }
   }
-  local.wall_seconds = seconds_since(t_start);
+  local.wall_seconds = t_start.seconds();
   if (stats) *stats = local;
   return results;
 }

@@ -1,6 +1,7 @@
 #include "pipeline/batch.h"
 
 #include "core/error.h"
+#include "core/stopwatch.h"
 #include "io/asset_bytes.h"
 #include "io/atomic_file.h"
 #include "io/gltf_io.h"
@@ -10,7 +11,6 @@
 #include <algorithm>
 #include <atomic>
 #include <cerrno>
-#include <chrono>
 #include <csignal>
 #include <cstdio>
 #include <cstring>
@@ -32,9 +32,6 @@ namespace fs = std::filesystem;
 using json = nlohmann::ordered_json;
 
 namespace {
-
-using Clock = std::chrono::steady_clock;
-double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
 std::string trim(const std::string& s) {
   size_t a = s.find_first_not_of(" \t\r\n"), b = s.find_last_not_of(" \t\r\n");
@@ -247,7 +244,7 @@ bool up_to_date(const BatchItem& item, const BatchOptions& o) {
 }
 
 json process_asset(const BatchItem& item, const BatchOptions& o, engine::Engine* engine, const std::string& engine_error) {
-  const auto t0 = Clock::now();
+  const Stopwatch t0;
   const fs::path out = output_path(item, o);
   json report = {{"name", item.name}, {"input", item.input}, {"position", item.position},
                  {"input_hash", hash_asset(item.input, o.refs)}, {"options", options_json(o)}};
@@ -290,7 +287,7 @@ json process_asset(const BatchItem& item, const BatchOptions& o, engine::Engine*
     report["status"] = "failed";
     report["error"] = std::string("internal error: ") + e.what();
   }
-  report["seconds"] = seconds_since(t0);
+  report["seconds"] = t0.seconds();
   if (report["status"] == "failed") {
     for (const char* key : {"output", "output_bytes", "output_hash", "eval"}) report.erase(key);
     remove_outputs(item, o);
@@ -305,7 +302,7 @@ json process_asset(const BatchItem& item, const BatchOptions& o, engine::Engine*
 }
 
 json run_batch(const BatchOptions& o, const EngineFactory& make_engine, const BatchLog& log) {
-  const auto t0 = Clock::now();
+  const Stopwatch t0;
   if (o.format != "glb" && o.format != "gltf") throw std::invalid_argument("--format must be glb or gltf");
   if (o.jobs == 0 || o.jobs > SharedState::kMaxJobs)
     throw std::invalid_argument("--jobs must be between 1 and " + std::to_string(SharedState::kMaxJobs));
@@ -441,13 +438,13 @@ json run_batch(const BatchOptions& o, const EngineFactory& make_engine, const Ba
   json summary = {{"manifest", o.manifest}, {"output_dir", o.output_dir},
                   {"shard", {{"index", o.shard_index}, {"count", o.shard_count}}},
                   {"jobs", o.jobs}, {"threads_per_job", threads}, {"options", options_json(o)},
-                  {"counts", counts_of(assets)}, {"assets", assets}, {"seconds", seconds_since(t0)}};
+                  {"counts", counts_of(assets)}, {"assets", assets}, {"seconds", t0.seconds()}};
   write_json(summary_path(o), summary);
   return summary;
 }
 
 json collect_batch(const BatchOptions& o) {
-  const auto t0 = Clock::now();
+  const Stopwatch t0;
   std::vector<BatchItem> items = read_manifest(o.manifest);
   json assets = json::array();
   for (const auto& it : items) {
@@ -468,7 +465,7 @@ json collect_batch(const BatchOptions& o) {
   whole.shard_index = 0, whole.shard_count = 1;
   json summary = {{"manifest", o.manifest}, {"output_dir", o.output_dir}, {"collected", true},
                   {"options", options_json(o)}, {"counts", counts_of(assets)}, {"assets", assets},
-                  {"seconds", seconds_since(t0)}};
+                  {"seconds", t0.seconds()}};
   write_json(summary_path(whole), summary);
   return summary;
 }

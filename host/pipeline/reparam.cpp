@@ -10,6 +10,7 @@
 #include "core/disjoint_sets.h"
 #include "core/error.h"
 #include "core/quantile.h"
+#include "core/stopwatch.h"
 #include "core/texture_cost.h"
 #include "eval/eval.h"
 #include "eval/resize.h"
@@ -24,7 +25,6 @@
 #include "perceptual/triangle_view.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <map>
 #include <numeric>
@@ -35,10 +35,6 @@ namespace uvpress::pipeline {
 using json = nlohmann::ordered_json;
 
 namespace {
-
-using Clock = std::chrono::steady_clock;
-
-double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
 // One UV set of one primitive: TEXCOORD_n of asset.primitives[primitive].
 struct UvSet {
@@ -300,7 +296,7 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
     // Mesh stage per chart. Weights floored relative to the whole layout's mean (not only
     // the chart's): a chart of flat signal has weights near 0 everywhere and would follow
     // its targets only at w / (w + w_rs) per iteration.
-    auto t0 = Clock::now();
+    Stopwatch t0;
     perceptual::MeshStageOptions mesh_options;
     {
       double sum = 0;
@@ -367,7 +363,7 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
         if ((before > 0 && after <= 0) || (before < 0 && after >= 0)) ++layout_flips;
       }
     }
-    out.t_mesh += seconds_since(t0);
+    out.t_mesh += t0.seconds();
 
     // The packing scale may grow until the layout fills the budget, but not past the point
     // where the densest triangles (area-weighted 98th percentile) get more texels than the
@@ -400,7 +396,7 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
     }
 
     // Pack into the budget (eq. 20-21).
-    t0 = Clock::now();
+    t0.restart();
     std::vector<atlas::ChartShape> shapes(P.units.size());
     for (size_t u = 0; u < P.units.size(); ++u)
       for (uint32_t c : P.units[u]) {
@@ -507,8 +503,8 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
         new_uv[si][2 * v] = welded_new[si][2 * w], new_uv[si][2 * v + 1] = welded_new[si][2 * w + 1];
       }
     }
-    out.t_pack += seconds_since(t0);
-    jl["pack_seconds"] = seconds_since(t0);
+    out.t_pack += t0.seconds();
+    jl["pack_seconds"] = t0.seconds();
 
     // The invariant, on the UVs as written: no two triangles of the layout overlap unless
     // they did in the input. The packer keeps its units' footprints apart and a unit's
@@ -532,7 +528,7 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
     }
 
     // Re-bake every image of the layout into the new UVs, at the driver's new density.
-    t0 = Clock::now();
+    t0.restart();
     std::vector<atlas::RebakeMesh> meshes;
     for (size_t si = 0; si < L.uv_sets.size(); ++si) {
       const io::Primitive& prim = asset.primitives[size_t(L.uv_sets[si].primitive)];
@@ -602,7 +598,7 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
                               {"new_bytes", file.image_bytes[size_t(i)].size()}});
       if (progress) progress("re-bake (" + cand.name + ", layout " + std::to_string(li) + ")", ++baked_count, L.images.size());
     }
-    out.t_bake += seconds_since(t0);
+    out.t_bake += t0.seconds();
 
     // New UV accessors (the old ones may be shared with primitives outside the layout).
     for (size_t si = 0; si < L.uv_sets.size(); ++si) {
@@ -664,7 +660,7 @@ void resize_images(io::GltfFile& file, const std::vector<std::pair<int, std::arr
 
 json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o, const Progress& progress,
              io::GltfFile* layout_out) {
-  const auto t_start = Clock::now();
+  const Stopwatch t_start;
   const io::GltfFile original = file;
   json report;
   json stages = json::object();
@@ -772,7 +768,7 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
       std::sort(which.begin(), which.end());
       // Kept per triangle (the candidates derive their targets from it).
       if (o.optimize && !which.empty()) {
-        auto t0 = Clock::now();
+        Stopwatch t0;
         perceptual::TriangleViewInput in{prim.positions.data(), prim.vertex_count(), prim.indices.data(),
                                          prim.triangle_count(), uv.data(), driver.width, driver.height};
         perceptual::TriangleStageOptions topt = o.triangle;
@@ -807,7 +803,7 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
           tri.lambda_area.push_back(r.lambda1 * r.lambda2);
         }
         for (size_t k = 0; k < results.size(); ++k) P.results[si][which[k]] = std::move(results[k]);
-        t_triangle += seconds_since(t0);
+        t_triangle += t0.seconds();
       }
     }
 
@@ -844,7 +840,7 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
   std::string score_failure;
   double t_score = 0;
   if (scoring) {
-    auto t0 = Clock::now();
+    Stopwatch t0;
     eval::EvalOptions score_options;
     score_options.artifacts = false;
     score_options.resolution = o.score_resolution, score_options.filter = o.score_filter;
@@ -860,12 +856,12 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
       score_failure = e.what();
       warnings.push_back("candidates and the resize guard skipped: eval cannot score this asset (" + score_failure + ")");
     }
-    t_score += seconds_since(t0);
+    t_score += t0.seconds();
   }
   auto score = [&](const io::GltfFile& f) {
-    auto t0 = Clock::now();
+    Stopwatch t0;
     const eval::Scored scored = scorer->score(f);
-    t_score += seconds_since(t0);
+    t_score += t0.seconds();
     return scored;
   };
   // Builds a candidate, scores it, and keeps it when it is the first or scores better.
@@ -924,7 +920,7 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
   std::string chosen_by = prepared.empty() ? "untouched" : "reparam";
   if (!score_failure.empty()) guard = {{"skipped", score_failure}};
   if (o.guard && o.max_gmsd <= 0 && scorer) {
-    auto t0 = Clock::now();
+    Stopwatch t0;
     std::vector<std::pair<int, std::array<uint32_t, 2>>> sizes;
     for (const auto& t : chosen.textures) {
       // The same texels at the image's own aspect ratio: a user's resize keeps the shape
@@ -937,7 +933,7 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
     }
     io::GltfFile resized = original;
     resize_images(resized, sizes);
-    t_score += seconds_since(t0);  // the resize; score() counts itself
+    t_score += t0.seconds();  // the resize; score() counts itself
     const double q_resize = score(resized).q;
     guard = {{"q_reparam", chosen.q}, {"q_resize", q_resize}, {"resize", "lanczos3-srgb"}};
     if (!(chosen.q < q_resize)) {
@@ -952,7 +948,7 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
 
   if (o.max_gmsd > 0 && !chosen.textures.empty()) {
     // --max-gmsd: the cheapest point of the new layout's q-c curve that meets the bound.
-    auto t0 = Clock::now();
+    Stopwatch t0;
     eval::EvalOptions eo;
     eo.resolution = o.score_resolution, eo.filter = o.score_filter;
     eo.noise_floor = false;
@@ -989,14 +985,14 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
       chosen.new_texels += double(w) * h;
     }
     report["max_gmsd"] = {{"bound", o.max_gmsd}, {"met", met}, {"c_r", chosen_c}, {"q", chosen_q}, {"scale", ratio}};
-    stages["max_gmsd_eval"] = seconds_since(t0);
+    stages["max_gmsd_eval"] = t0.seconds();
   }
 
   // What each texture costs as written (texels, encoded bytes, VRAM) against the input's,
   // and against the input resized (Lanczos-3) to the same size and encoded the same way:
   // the bytes a user's resize would have cost for those texels.
   {
-    auto t0 = Clock::now();
+    Stopwatch t0;
     TextureCost old_total, new_total;
     uint64_t old_bytes = 0, new_bytes = 0, resize_bytes = 0;
     for (auto& t : chosen.textures) {
@@ -1026,7 +1022,7 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
     report["texture_totals"] = {{"old", cost_json(old_total, old_bytes)},
                                 {"new", cost_json(new_total, new_bytes)},
                                 {"resize_bytes", resize_bytes}};
-    stages["texture_costs"] = seconds_since(t0);
+    stages["texture_costs"] = t0.seconds();
   }
   // Nothing the replacement left unreferenced is written (the old UV accessors, their
   // bufferViews, the old image bytes); what the input itself left unused stays.
@@ -1058,7 +1054,7 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
   report["triangles_infeasible"] = infeasible;
   report["stages"] = stages;
   report["warnings"] = warnings;
-  report["seconds"] = seconds_since(t_start);
+  report["seconds"] = t_start.seconds();
   return report;
 }
 

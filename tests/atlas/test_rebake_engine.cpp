@@ -15,6 +15,7 @@
 
 #include "atlas/rebake.h"
 #include "engine.h"
+#include "support.h"
 
 #include <algorithm>
 #include <cmath>
@@ -29,13 +30,6 @@ using atlas::RebakeOptions;
 using atlas::RebakeRole;
 
 namespace {
-
-std::unique_ptr<engine::Engine> lavapipe(uint64_t max_buffer_bytes = 0) {
-  engine::EngineOptions o;
-  o.validation = true;
-  o.max_buffer_bytes = max_buffer_bytes;
-  return engine::make_vulkan_engine(engine::DeviceRequest::Lavapipe, o);
-}
 
 // Smooth structure plus 8-bit noise; alpha (the last of 2 or 4 channels) in [alpha_min, 1],
 // and exactly 0 in a band when `holes` (fully transparent footprints: the straight pass).
@@ -167,7 +161,7 @@ Diff compare(engine::Engine& vk, const Image& src, const std::vector<RebakeMesh>
 }  // namespace
 
 TEST_CASE("rebake on the engine: Vulkan matches the CPU kernel on random chart layouts", "[atlas][vulkan]") {
-  auto vk = lavapipe();
+  UVPRESS_LAVAPIPE_OR_SKIP(vk);
   std::mt19937 rng(7);
   struct Case {
     uint32_t channels;
@@ -207,7 +201,7 @@ TEST_CASE("rebake on the engine: Vulkan matches the CPU kernel on random chart l
 TEST_CASE("rebake on the engine: transparent footprints, several meshes, buffer chunking", "[atlas][vulkan]") {
   // 48 KiB buffers: the 96 x 80 RGBA source (120 KiB) is split over three buffers, and the
   // new image goes one tile row per submit.
-  auto vk = lavapipe(48 * 1024);
+  UVPRESS_LAVAPIPE_OR_SKIP(vk, 48 * 1024);
   std::mt19937 rng(11);
   const Image src = test_image(96, 80, 4, rng, 0.0f, true);
   const Layout a = random_charts(rng, 3, 2, 0.2, 0.6), b = random_charts(rng, 2, 2, 0.3, 0.8);
@@ -227,7 +221,7 @@ TEST_CASE("rebake on the engine: transparent footprints, several meshes, buffer 
 }
 
 TEST_CASE("rebake on the engine: triangle soups agree but for edge ties", "[atlas][vulkan]") {
-  auto vk = lavapipe();
+  UVPRESS_LAVAPIPE_OR_SKIP(vk);
   std::mt19937 rng(5);
   for (uint32_t channels : {1u, 4u}) {
     const Image src = test_image(128, 128, channels, rng, 0.2f, false);

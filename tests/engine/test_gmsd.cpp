@@ -4,6 +4,7 @@
 
 #include "cpu/gmsd.h"
 #include "engine.h"
+#include "support.h"
 
 #include <cmath>
 #include <functional>
@@ -57,9 +58,7 @@ TEST_CASE("GMSD golden vectors: CPU double within 1e-12", "[engine][gmsd]") {
 }
 
 TEST_CASE("GMSD golden vectors: float paths within 1e-6 relative, CPU and Vulkan", "[engine][gmsd][vulkan]") {
-  EngineOptions o;
-  o.validation = true;
-  auto vk = make_vulkan_engine(DeviceRequest::Lavapipe, o);
+  UVPRESS_LAVAPIPE_OR_SKIP(vk);
   auto cpu_engine = make_cpu_engine({});
   for (const auto& c : goldens()) {
     INFO("case " << c.name);

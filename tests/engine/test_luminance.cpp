@@ -4,6 +4,7 @@
 #include <catch2/catch.hpp>
 
 #include "engine.h"
+#include "support.h"
 
 #include <cmath>
 #include <random>
@@ -54,13 +55,6 @@ double max_diff(const std::vector<float>& a, const std::vector<float>& b) {
   return m;
 }
 
-std::unique_ptr<Engine> lavapipe(uint64_t max_buffer = 0) {
-  EngineOptions o;
-  o.validation = true;
-  o.max_buffer_bytes = max_buffer;
-  return make_vulkan_engine(DeviceRequest::Lavapipe, o);
-}
-
 }  // namespace
 
 TEST_CASE("CPU luminance and downsample match the double-precision definition", "[engine]") {
@@ -86,7 +80,7 @@ TEST_CASE("CPU backend gives identical results for any thread count", "[engine]"
 }
 
 TEST_CASE("Vulkan on lavapipe matches the CPU backend with zero validation errors", "[engine][vulkan]") {
-  auto gpu = lavapipe();
+  UVPRESS_LAVAPIPE_OR_SKIP(gpu);
   auto info = gpu->device();
   CHECK(info.backend == "vulkan");
   CHECK(info.type == "cpu");
@@ -110,9 +104,10 @@ TEST_CASE("Vulkan batches larger than a buffer are chunked with identical result
   const uint32_t w = 32, h = 32, count = 50;
   auto px = random_images(w, h, count, 99);
   Rgba8Batch batch{w, h, count, px.data()};
-  auto whole = lavapipe()->luminance(batch);
+  UVPRESS_LAVAPIPE_OR_SKIP(whole_engine);
+  auto whole = whole_engine->luminance(batch);
   // 7 images per buffer: 8 chunks, the last one partial.
-  auto chunked_engine = lavapipe(7 * w * h * 4);
+  auto chunked_engine = uvpress::test::lavapipe(7 * w * h * 4);
   auto chunked = chunked_engine->luminance(batch);
   CHECK(chunked.full == whole.full);
   CHECK(chunked.half == whole.half);
@@ -125,7 +120,7 @@ TEST_CASE("Vulkan batches larger than a buffer are chunked with identical result
 TEST_CASE("An empty batch is fine on both backends", "[engine][vulkan]") {
   Rgba8Batch empty{8, 8, 0, nullptr};
   CHECK(make_cpu_engine({})->luminance(empty).full.empty());
-  auto gpu = lavapipe();
+  UVPRESS_LAVAPIPE_OR_SKIP(gpu);
   CHECK(gpu->luminance(empty).half.empty());
   CHECK(gpu->validation_errors() == 0);
 }

@@ -6,6 +6,7 @@
 #include "cpu/views.h"
 #include "engine.h"
 #include "perceptual/triangle_view.h"
+#include "support.h"
 
 #include <Eigen/Dense>
 
@@ -16,12 +17,6 @@ using namespace uvpress;
 using namespace uvpress::engine;
 
 namespace {
-
-std::unique_ptr<Engine> lavapipe() {
-  EngineOptions o;
-  o.validation = true;
-  return make_vulkan_engine(DeviceRequest::Lavapipe, o);
-}
 
 // A luminance texture: fine checks and sines on the left half, constant on the right.
 std::vector<float> test_texture(uint32_t w, uint32_t h) {
@@ -108,7 +103,7 @@ ViewCandidate candidate(uint32_t view, float l1, float l2, float alpha, float be
 TEST_CASE("Views: coverage identical and pixels within 1e-5 between backends on random one-rings", "[engine][views][vulkan]") {
   const uint32_t tw = 96, th = 80;
   auto tex = test_texture(tw, th);
-  auto vk = lavapipe();
+  UVPRESS_LAVAPIPE_OR_SKIP(vk);
   auto cpu_engine = make_cpu_engine({});
   for (uint32_t size : {64u, 32u, 18u}) {
     INFO("size " << size);
@@ -153,7 +148,7 @@ TEST_CASE("Views: the bake equals a dense double normal-equations solve", "[engi
   auto mesh = curved_grid(6, 0.35f);
   ViewSetDesc d = mesh_views(mesh, tex, tw, th, size);
   auto cpu_engine = make_cpu_engine({});
-  auto vk = lavapipe();
+  UVPRESS_LAVAPIPE_OR_SKIP(vk);
   auto sa = cpu_engine->prepare_views(d), sb = vk->prepare_views(d);
   for (uint32_t v : {0u, 13u, 40u}) {
     for (auto c : {candidate(v, 1, 1, 0), candidate(v, 0.5f, 0.8f, 0.4f, 0.3f)}) {
@@ -220,8 +215,9 @@ TEST_CASE("Views: identity reproduces the reference; shrinking costs more on det
   auto detailed = curved_grid(6, 0.4f);
   auto flat = detailed;
   for (size_t i = 0; i < flat.uvs.size(); i += 2) flat.uvs[i] += 0.5f;  // the constant right half
-  for (auto* e : {make_cpu_engine({}).release(), lavapipe().release()}) {
-    std::unique_ptr<Engine> engine(e);
+  UVPRESS_LAVAPIPE_OR_SKIP(vk);
+  auto cpu_engine = make_cpu_engine({});
+  for (Engine* engine : {cpu_engine.get(), vk.get()}) {
     INFO(engine->device().backend);
     auto det = engine->prepare_views(mesh_views(detailed, tex, tw, th, size));
     auto con = engine->prepare_views(mesh_views(flat, tex, tw, th, size));
@@ -349,11 +345,11 @@ ViewSetDesc square_views(const Square& q, uint32_t size) {
 struct BothScores {
   std::vector<float> gmsd[2], lattice[2];
 };
-BothScores score_on_both(const ViewSetDesc& d, const std::vector<ViewCandidate>& c) {
+BothScores score_on_both(Engine& vk, const ViewSetDesc& d, const std::vector<ViewCandidate>& c) {
   BothScores out;
   int b = 0;
-  for (auto* e : {make_cpu_engine({}).release(), lavapipe().release()}) {
-    std::unique_ptr<Engine> engine(e);
+  auto cpu_engine = make_cpu_engine({});
+  for (Engine* engine : {cpu_engine.get(), &vk}) {
     auto views = engine->prepare_views(d);
     out.gmsd[b].resize(c.size()), out.lattice[b].resize(c.size());
     engine->score_views(*views, c.data(), c.size(), out.gmsd[b].data(), nullptr, out.lattice[b].data());
@@ -374,7 +370,8 @@ TEST_CASE("Views: a 48-texel view with 5-texel detail is lossless at J = I and s
   std::vector<ViewCandidate> c;
   for (uint32_t v = 0; v < 2; ++v)
     for (float l : {1.0f, 0.9f, 0.7f, 0.5f}) c.push_back(candidate(v, l, l, 0.0f));
-  const BothScores r = score_on_both(d, c);
+  UVPRESS_LAVAPIPE_OR_SKIP(vk);
+  const BothScores r = score_on_both(*vk, d, c);
   for (int b = 0; b < 2; ++b)
     for (uint32_t v = 0; v < 2; ++v) {
       const float* s = &r.gmsd[b][4 * v];
@@ -405,7 +402,8 @@ TEST_CASE("Views: a one-ring across a UV seam gets its own region of the candida
   std::vector<ViewCandidate> c;
   for (uint32_t v = 0; v < 2; ++v)
     for (float l : {1.0f, 0.6f, 0.4f}) c.push_back(candidate(v, l, l, l < 1 ? 0.2f : 0.0f));
-  const BothScores r = score_on_both(d, c);
+  UVPRESS_LAVAPIPE_OR_SKIP(vk);
+  const BothScores r = score_on_both(*vk, d, c);
   for (int b = 0; b < 2; ++b)
     for (uint32_t v = 0; v < 2; ++v) {
       const float* s = &r.gmsd[b][3 * v];

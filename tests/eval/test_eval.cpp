@@ -53,12 +53,6 @@ engine::MeshRenderDesc render_desc(const DemoMesh& d, const std::vector<float>& 
   return r;
 }
 
-std::unique_ptr<engine::Engine> lavapipe() {
-  engine::EngineOptions o;
-  o.validation = true;
-  return engine::make_vulkan_engine(engine::DeviceRequest::Lavapipe, o);
-}
-
 }  // namespace
 
 TEST_CASE("dodecahedron cameras frame the whole mesh from 20 directions", "[eval]") {
@@ -79,12 +73,7 @@ TEST_CASE("dodecahedron cameras frame the whole mesh from 20 directions", "[eval
 }
 
 TEST_CASE("render_mesh: Vulkan (lavapipe, validation on) matches the CPU oracle", "[eval][engine]") {
-  std::unique_ptr<engine::Engine> vk;
-  try {
-    vk = lavapipe();
-  } catch (const engine::EngineError& e) {
-    UVPRESS_SKIP(std::string("no lavapipe: ") + e.what());
-  }
+  UVPRESS_LAVAPIPE_OR_SKIP(vk);
   auto cpu = engine::make_cpu_engine({});
   DemoMesh d = demo();
   const std::vector<float> lum = perceptual::luminance_plane(d.texture);

@@ -44,12 +44,6 @@ std::vector<float> lod_chain(uint32_t w, uint32_t h, uint32_t levels) {
   return t;
 }
 
-std::unique_ptr<engine::Engine> lavapipe() {
-  engine::EngineOptions o;
-  o.validation = true;
-  return engine::make_vulkan_engine(engine::DeviceRequest::Lavapipe, o);
-}
-
 // The demo sheet with a `side`^2 texture of independent random grey texels: detail at
 // the scale of one texel everywhere.
 io::GltfFile noise_asset(uint32_t side, int grid = 4) {
@@ -147,12 +141,7 @@ TEST_CASE("render_mesh trilinear: single-texel detail minified averages out; bil
 
 TEST_CASE("render_mesh: Vulkan (lavapipe, validation on) matches the CPU oracle with trilinear filtering",
           "[eval][engine]") {
-  std::unique_ptr<engine::Engine> vk;
-  try {
-    vk = lavapipe();
-  } catch (const engine::EngineError& e) {
-    UVPRESS_SKIP(std::string("no lavapipe: ") + e.what());
-  }
+  UVPRESS_LAVAPIPE_OR_SKIP(vk);
   auto cpu = engine::make_cpu_engine({});
   io::GltfFile file = pipeline::make_demo_asset({16, 256});
   const io::Asset asset = io::build_asset(file);
