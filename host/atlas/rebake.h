@@ -74,6 +74,11 @@ struct RebakeOptions {
   bool linear_light = true;   // Color: filter in linear light (else in stored values)
   uint32_t max_samples = 16;  // per axis and texel
   bool fill_gutter = true;
+  // Texels past each chart's edge (Chebyshev distance) that rebake_lanczos bakes from the
+  // source through the nearest chart texel's triangle map, extended past the triangle: the
+  // gutter then shows what the source has around the chart, and coarse mip levels blend it
+  // in at the chart's edge as the input's own chain does (0: gutters only filled).
+  uint32_t surround = 0;
 };
 
 struct RebakeStats {

@@ -80,10 +80,33 @@ SourceCharts source_charts(const RebakePlan& plan, int SW, int SH) {
   return sc;
 }
 
+// `owner` extended by `r` texels past the owned ones (Chebyshev distance): pass after pass,
+// an unowned texel takes the owner of its first owned 8-neighbour of the previous pass, in
+// a fixed neighbour order, so the result does not depend on threads.
+std::vector<uint32_t> extend_owners(const std::vector<uint32_t>& owner, int W, int H, uint32_t r) {
+  std::vector<uint32_t> cur = owner, next = owner;
+  for (uint32_t pass = 0; pass < r; ++pass) {
+#pragma omp parallel for schedule(static)
+    for (int y = 0; y < H; ++y)
+      for (int x = 0; x < W; ++x) {
+        if (cur[size_t(y) * W + x] != engine::kRebakeNoOwner) continue;
+        for (int dy = -1; dy <= 1; ++dy)
+          for (int dx = -1; dx <= 1; ++dx) {
+            const int u = x + dx, v = y + dy;
+            if (u < 0 || v < 0 || u >= W || v >= H) continue;
+            const uint32_t o = cur[size_t(v) * W + u];
+            if (o != engine::kRebakeNoOwner && next[size_t(y) * W + x] == engine::kRebakeNoOwner) next[size_t(y) * W + x] = o;
+          }
+      }
+    cur = next;
+  }
+  return cur;
+}
+
 }  // namespace
 
 Image rebake_lanczos(const Image& source, const std::vector<RebakeMesh>& meshes, const RebakeOptions& options,
-                     const Image& area) {
+                     const Image& area, std::vector<uint8_t>* baked) {
   if (options.role == RebakeRole::Normal) return area;
   RebakeOptions stored = options;
   stored.role = RebakeRole::Data;  // the plan's geometry only: values are read as stored
@@ -93,14 +116,17 @@ Image rebake_lanczos(const Image& source, const std::vector<RebakeMesh>& meshes,
   Image out = area;
   std::vector<uint8_t> covered(size_t(W) * H, 0);
   const SourceCharts charts = source_charts(plan, SW, SH);
+  const std::vector<uint32_t> owners = options.surround > 0 ? extend_owners(plan.owner, W, H, options.surround) : plan.owner;
 #pragma omp parallel for schedule(dynamic, 4)
   for (int y = 0; y < H; ++y)
     for (int x = 0; x < W; ++x) {
-      const uint32_t own = plan.owner[size_t(y) * W + x];
+      const uint32_t own = owners[size_t(y) * W + x];
       if (own == engine::kRebakeNoOwner) continue;
       const engine::RebakeTriangle& t = plan.triangles[plan.tile_list[own]];
       const int32_t chart = charts.chart_of_triangle[plan.tile_list[own]];
-      covered[size_t(y) * W + x] = 1;
+      // Chart texels count as baked even where the area bake's value stays; surround texels
+      // only once this bake writes them (else the gutter fill takes them).
+      if (plan.owner[size_t(y) * W + x] != engine::kRebakeNoOwner) covered[size_t(y) * W + x] = 1;
       // The texel centre's preimage, and the kernel's frame: M = V min(S^-1, 1) U^T.
       const double cx = x + 0.5 - t.n[0][0], cy = y + 0.5 - t.n[0][1];
       const double ox = t.o0[0] + t.J[0][0] * cx + t.J[0][1] * cy;
@@ -147,8 +173,13 @@ Image rebake_lanczos(const Image& source, const std::vector<RebakeMesh>& meshes,
       if (!(wsum > 1e-6)) continue;
       float* o = &out.pixels[(size_t(y) * W + x) * C];
       for (int ch = 0; ch < C; ++ch) o[ch] = float(std::clamp(acc[ch] / wsum, 0.0, 1.0));
+      covered[size_t(y) * W + x] = 1;
     }
   if (options.fill_gutter) fill_gutter(out, covered, options.role == RebakeRole::Color);
+  if (baked) {
+    baked->resize(covered.size(), 0);
+    for (size_t i = 0; i < covered.size(); ++i) (*baked)[i] |= covered[i];
+  }
   return out;
 }
 

@@ -2,13 +2,13 @@
 #include "eval.h"
 
 #include "core/error.h"
+#include "core/stopwatch.h"
 #include "cpu/gmsd.h"
 #include "layout.h"
 #include "perceptual/triangle_view.h"
 #include "resize.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <limits>
 #include <thread>
@@ -96,13 +96,6 @@ std::array<float, 16> tile_camera(const std::array<float, 16>& m, uint32_t k, ui
   return t;
 }
 
-namespace {
-
-double seconds_since(std::chrono::steady_clock::time_point t) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
-}
-
-}  // namespace
 
 Savings pixel_ratio_at_equal_q(const std::vector<std::pair<double, double>>& a,
                                const std::vector<std::pair<double, double>>& b, double noise_floor) {
@@ -220,9 +213,9 @@ void render_views(engine::Engine& engine, const LayoutMesh& m, const Texture& te
     for (size_t v = first; v < first + views; ++v)
       for (uint32_t b = 0; b < k; ++b)
         for (uint32_t a = 0; a < k; ++a) d.cameras.push_back(k == 1 ? cameras[v] : tile_camera(cameras[v], k, a, b));
-    const auto t0 = std::chrono::steady_clock::now();
+    const Stopwatch t0;
     auto r = engine.render_mesh(d);
-    timing.render += seconds_since(t0);
+    timing.render += t0.seconds();
     if (k == 1) {
       fn(first, views, r.pixels.data());
       continue;
@@ -243,7 +236,7 @@ void render_views(engine::Engine& engine, const LayoutMesh& m, const Texture& te
 // GMSD of `count` view pairs of res x res.
 void gmsd_views(engine::Engine& engine, const float* ref, const float* img, uint32_t res, size_t count, float* out,
                 Timing& timing) {
-  const auto t0 = std::chrono::steady_clock::now();
+  const Stopwatch t0;
   if (res <= shader::kViewMaxSize) {
     engine::ImagePairs pairs{res, res, uint32_t(count), ref, img};
     const auto g = engine.gmsd(pairs);
@@ -258,7 +251,7 @@ void gmsd_views(engine::Engine& engine, const float* ref, const float* img, uint
       });
     for (auto& th : pool) th.join();
   }
-  timing.gmsd += seconds_since(t0);
+  timing.gmsd += t0.seconds();
 }
 
 // Texture size at relative cost c_r in image texels: W H = c_r ref_texels, `aspect` kept.
@@ -304,9 +297,9 @@ double score_views(engine::Engine& engine, const Setup& s, const LayoutMesh& m, 
 
 // `image` as the views sample it (view_texture), timed.
 Texture timed_view_texture(const Image& image, TextureFilter filter, Timing& timing) {
-  const auto t0 = std::chrono::steady_clock::now();
+  const Stopwatch t0;
   Texture tex = view_texture(image, filter);
-  timing.textures += seconds_since(t0);
+  timing.textures += t0.seconds();
   return tex;
 }
 
@@ -342,9 +335,9 @@ std::vector<float> texels_per_pixel(engine::Engine& engine, const LayoutMesh& re
   d.indices = ref.indices.data(), d.triangle_count = tris;
   d.uvs = ref.uvs.data();
   d.texture = flat.texels.data(), d.texture_width = d.texture_height = 1, d.channels = 1;
-  const auto t0 = std::chrono::steady_clock::now();
+  const Stopwatch t0;
   const auto r = engine.render_mesh(d);
-  timing.render += seconds_since(t0);
+  timing.render += t0.seconds();
   std::vector<float> out;
   std::vector<double> screen(tris);
   for (size_t v = 0; v < cameras.size(); ++v) {
@@ -570,7 +563,7 @@ Scored score_as_written(const io::GltfFile& reference, const io::GltfFile& candi
 nlohmann::ordered_json evaluate(const io::GltfFile& reference, const std::vector<LayoutInput>& others,
                                 engine::Engine& engine, const EvalOptions& o, EvalArtifacts* artifacts,
                                 const Progress& progress) {
-  const auto t_start = std::chrono::steady_clock::now();
+  const Stopwatch t_start;
   Timing timing;
   const Setup s = set_up(reference, engine, o, timing);
   const LayoutMesh& ref = s.ref;
@@ -595,10 +588,10 @@ nlohmann::ordered_json evaluate(const io::GltfFile& reference, const std::vector
   }
   auto rebake_into = [&](Entry& e) {
     auto [W, H] = size_at(1.0, s.image_texels, e.aspect);
-    const auto t0 = std::chrono::steady_clock::now();
+    const Stopwatch t0;
     std::string method;
     e.mesh.full = detail::rebake_from(ref, e.mesh, W, H, &method);
-    timing.textures += seconds_since(t0);
+    timing.textures += t0.seconds();
     e.mesh.texture_source = "rebaked";
     e.extra["rebake"] = method;
   };
@@ -700,9 +693,9 @@ nlohmann::ordered_json evaluate(const io::GltfFile& reference, const std::vector
       if (progress) progress("curve " + m.name, step, steps);
       ++step;
       auto [W, H] = size_at(c_r, s.image_texels, aspect);
-      const auto t0 = std::chrono::steady_clock::now();
+      const Stopwatch t0;
       const Image tex = resize(m.full, W, H);
-      timing.textures += seconds_since(t0);
+      timing.textures += t0.seconds();
       std::vector<float> g;
       const double q = score_views(engine, s, m, tex, timing, &g);
       const double actual = double(W) * H / s.image_texels;
@@ -800,7 +793,7 @@ nlohmann::ordered_json evaluate(const io::GltfFile& reference, const std::vector
   report["seconds"] = {{"textures", timing.textures},
                        {"render", timing.render},
                        {"gmsd", timing.gmsd},
-                       {"total", seconds_since(t_start)}};
+                       {"total", t_start.seconds()}};
   if (progress) progress("done", steps, steps);
   return report;
 }

@@ -36,8 +36,7 @@
 //   are not disks keep their input UVs scaled to their 3-D area, laid out on shelves at one
 //   scale).
 // - Each layout's full texture: the input's own; for every other layout, the reference
-//   texture re-baked into its UVs (atlas::rebake when the tree has it, else a plain
-//   bilinear bake with a dilated gutter) at the size where c_r = 1, when its triangles
+//   texture re-baked into its UVs (atlas::rebake) at the size where c_r = 1, when its triangles
 //   correspond one to one with the reference's (same count, same corner positions);
 //   otherwise the file's own texture.
 // - Cost: image texels, what users pay for (every texel of the image in VRAM and on the

@@ -418,9 +418,12 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
                                                  : o.cost * W * H;
     const uint32_t gutter = o.gutter == ReparamOptions::kAutoGutter ? atlas::mip_safe_gutter(budget_texels) : o.gutter;
     budget.pack.gutter = gutter, budget.pack.block = o.block;
-    // Whole-texel copies bring a ring of the source's own neighbours (what bilinear taps
-    // just past a chart's edge read in the input).
-    const uint32_t copy_ring = std::min(1u, gutter / 2);
+    // Every chart brings what the source has around it into half the gutter (whole-texel
+    // copies their ring of the source's own neighbours, re-baked charts their maps extended,
+    // RebakeOptions::surround): bilinear taps just past a chart's edge, and coarse mip
+    // levels at its edge, then blend in what they blend in the input.
+    const uint32_t copy_ring = gutter / 2;
+    const uint32_t edge_ring = std::min(1u, copy_ring);  // what must fit inside the image
     std::vector<char> unit_exact(P.units.size(), 0);
     if (o.exact_texels && cand.exact)
       for (size_t u = 0; u < P.units.size(); ++u) {
@@ -429,8 +432,9 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
         shapes[u].snap = unit_exact[u] != 0;  // so that the atlas chosen has room for whole-texel origins
       }
     // The image edges: half the gutter on an axis a sampler repeats across, else none, but
-    // room for the copies' ring, which clamping would replace by the chart's own edge texels
-    // (unless the unit spans the whole source: then its ring lies outside the source too).
+    // room for the copies' first ring (bilinear taps at level 0), which clamping would
+    // replace by the chart's own edge texels (unless the unit spans the whole source: then
+    // its ring lies outside the source too).
     const auto repeats = repeating_axes(asset, L);
     uint32_t ring = 0;
     for (size_t u = 0; u < P.units.size(); ++u) {
@@ -439,7 +443,7 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
       for (uint32_t c : P.units[u])
         for (size_t k = 0; k < charts[c].uv.size(); k += 2)
           for (int a = 0; a < 2; ++a) lo[a] = std::min(lo[a], charts[c].uv[k + a]), hi[a] = std::max(hi[a], charts[c].uv[k + a]);
-      if (lo[0] > 0.5 || lo[1] > 0.5 || hi[0] < W - 0.5 || hi[1] < H - 0.5) ring = copy_ring;
+      if (lo[0] > 0.5 || lo[1] > 0.5 || hi[0] < W - 0.5 || hi[1] < H - 0.5) ring = edge_ring;
     }
     budget.pack.edge_x = std::max(ring, atlas::edge_gutter(gutter, repeats[0]));
     budget.pack.edge_y = std::max(ring, atlas::edge_gutter(gutter, repeats[1]));
@@ -555,6 +559,7 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
           ro.role = atlas::RebakeRole::Data;
         ro.wrap_s = use.wrap_s, ro.wrap_t = use.wrap_t;
       }
+      ro.surround = copy_ring;
       // Images whose every unit's texels are copied below (atlas/place_texels.h) need only
       // the area bake, for the gutters: a sharper bake there would be overwritten.
       const bool copies = Rw > 0 && source.width == P.driver.width && source.height == P.driver.height &&
@@ -562,7 +567,8 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
       const bool all_copied = copies && std::find(unit_exact.begin(), unit_exact.end(), 0) == unit_exact.end();
       atlas::RebakeStats coverage;
       Image baked = atlas::rebake(source, meshes, ro, &coverage, &engine);
-      if (cand.bake == Candidate::Bake::Lanczos && !all_copied) baked = atlas::rebake_lanczos(source, meshes, ro, baked);
+      if (cand.bake == Candidate::Bake::Lanczos && !all_copied)
+        baked = atlas::rebake_lanczos(source, meshes, ro, baked, &coverage.coverage);
       if (cand.bake == Candidate::Bake::LeastSquares && ro.role != atlas::RebakeRole::Normal) {
         atlas::LsqBakeStats lsq;
         baked = atlas::rebake_least_squares(source, meshes, ro, baked, &lsq);
@@ -579,7 +585,7 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
         for (size_t u = 0; u < P.units.size(); ++u)
           if (unit_exact[u]) copied += atlas::copy_chart_texels(resized, shapes[u], packing, u, copy_ring, baked, &known);
         // The gutter filled again from what is now at the charts' edges: the copies (and
-        // their one-texel ring of the source's own neighbours), not the bake they replaced.
+        // their ring of the source's own neighbours), not the bake they replaced.
         if (copied) atlas::fill_gutter(baked, known, ro.role == atlas::RebakeRole::Color);
       }
       exact_texels += copied;

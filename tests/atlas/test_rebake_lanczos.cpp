@@ -90,3 +90,40 @@ TEST_CASE("rebake_lanczos: identity and quarter turns at the same size copy texe
   o.role = atlas::RebakeRole::Normal;
   CHECK(atlas::rebake_lanczos(src, {q.mesh()}, o, area).pixels == area.pixels);
 }
+
+TEST_CASE("rebake_lanczos: surround bakes what the source has around a chart into the gutter next to it", "[atlas]") {
+  // A dark chart (the square [16, 48)^2 of a 64^2 source) on a white background, moved to
+  // the middle of a 64^2 atlas at the same density. Next to its edge the gutter must show
+  // the source's white up to `surround` texels, then the fill (the chart's own dark mean).
+  Image src;
+  src.width = src.height = 64, src.channels = 3;
+  src.pixels.assign(64 * 64 * 3, 1.0f);
+  for (uint32_t y = 16; y < 48; ++y)
+    for (uint32_t x = 16; x < 48; ++x)
+      for (uint32_t c = 0; c < 3; ++c) src.at(x, y, c) = 0.1f;
+  const std::vector<uint32_t> idx{0, 1, 2, 0, 2, 3};
+  const std::vector<float> old_uv{0.25f, 0.25f, 0.75f, 0.25f, 0.75f, 0.75f, 0.25f, 0.75f};
+  const std::vector<float> new_uv{0.25f + 3 / 64.f, 0.25f, 0.75f + 3 / 64.f, 0.25f, 0.75f + 3 / 64.f, 0.75f, 0.25f + 3 / 64.f, 0.75f};
+  const atlas::RebakeMesh mesh{idx.data(), idx.size(), old_uv.data(), new_uv.data(), 4};
+  atlas::RebakeOptions o;
+  o.width = o.height = 64;
+  o.role = atlas::RebakeRole::Data;
+  const Image area = atlas::rebake(src, {mesh}, o);
+  const Image plain = atlas::rebake_lanczos(src, {mesh}, o, area);
+  o.surround = 4;
+  std::vector<uint8_t> baked;
+  const Image kept = atlas::rebake_lanczos(src, {mesh}, o, area, &baked);
+  // The chart occupies x in [19, 51): texels 51..54 right of it, 15..18 left, lie within 4.
+  for (uint32_t y = 20; y < 44; ++y) {
+    for (uint32_t x : {15u, 16u, 17u, 18u, 51u, 52u, 53u, 54u}) {
+      INFO("x " << x << " y " << y);
+      CHECK(kept.at(x, y, 0) > 0.95f);  // the source's white around the chart
+      CHECK(plain.at(x, y, 0) < 0.2f);  // without surround: the fill, the chart's dark
+      CHECK(baked[size_t(y) * 64 + x] == 1);
+    }
+    CHECK(kept.at(30, y, 0) == Approx(0.1f).margin(1e-4));  // the chart itself is unchanged
+    CHECK(kept.at(30, y, 0) == plain.at(30, y, 0));
+    CHECK(kept.at(58, y, 0) < 0.95f);  // past the surround: filled, not baked
+    CHECK(baked[size_t(y) * 64 + 58] == 0);
+  }
+}
