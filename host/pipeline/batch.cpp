@@ -218,7 +218,7 @@ std::string hash_asset(const std::string& path, const io::RefPolicy& refs) {
 
 json options_json(const BatchOptions& o) {
   const auto& r = o.reparam;
-  json j = {{"uvpress", o.version}, {"format", o.format}, {"cost", r.size ? json(nullptr) : json(r.cost)},
+  json j = {{"uvpress", o.version}, {"algorithm", kReparamRevision}, {"format", o.format}, {"cost", r.size ? json(nullptr) : json(r.cost)},
             {"size", r.size}, {"max_gmsd", r.max_gmsd}, {"pot", r.power_of_two}, {"keep_aspect", r.keep_aspect}, {"score_resolution", r.score_resolution}, {"score_filter", eval::to_string(r.score_filter)}, {"gutter", r.gutter == ReparamOptions::kAutoGutter ? json("auto") : json(r.gutter)}, {"block", r.block},
             {"optimize", r.optimize}, {"epsilon", r.triangle.epsilon}, {"evaluations", r.triangle.evaluations},
             {"view_size", r.triangle.view_size}, {"seed", r.triangle.seed}, {"early_stop", r.triangle.early_stop}, {"eval", o.eval},

@@ -141,6 +141,15 @@ TEST_CASE("batch: reports, summary, one failure never stops the others, resume",
   std::ofstream(out / "asset2.glb", std::ios::binary | std::ios::app) << "x";
   r = run_uvpress(cmd + " --cost 0.3");
   CHECK_THAT(r.out, Catch::Contains("1 ok, 2 skipped, 1 failed"));
+  // An output written by an older algorithm (its report says so) is redone.
+  {
+    json old = read_json(out / "asset1.report.json");
+    REQUIRE(old["options"]["algorithm"] == pipeline::kReparamRevision);
+    old["options"]["algorithm"] = pipeline::kReparamRevision - 1;
+    std::ofstream(out / "asset1.report.json") << old.dump(2);
+  }
+  r = run_uvpress(cmd + " --cost 0.3");
+  CHECK_THAT(r.out, Catch::Contains("1 ok, 2 skipped, 1 failed"));
 
   // Usage errors exit 2.
   CHECK(run_uvpress(cmd + " --shard-index 2 --shard-count 2").exit_code == 2);
