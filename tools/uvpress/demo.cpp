@@ -79,9 +79,11 @@ void add_demo(CLI::App& app, Globals& g) {
       // Pixels at equal q: reparam's own curve (its layout written at each c_r, scored as
       // written) against the input's resize curve, both at eval's resolution.
       nlohmann::ordered_json verdict = nullptr;
+      size_t verdict_ties = 0, verdict_points = 0;
       if (report.contains("curve")) {
         const double floor = evaluation["noise_floor"].is_number() ? evaluation["noise_floor"].get<double>() : 0.0;
         const auto sv = eval::pixel_ratio_at_equal_q(report["curve"], evaluation["layouts"][0]["curve"], floor);
+        verdict_ties = sv.ties, verdict_points = sv.points;
         if (sv.points && sv.ties == sv.points) {
           verdict = sv.ratio;
           std::printf("demo: reparam and a plain resize look the same at equal pixels (within eval's noise floor, q %.2g)\n", floor);
@@ -98,7 +100,8 @@ void add_demo(CLI::App& app, Globals& g) {
       std::printf("demo: report in %s/index.html (device: %s)\n", html.c_str(), engine->device().name.c_str());
       nlohmann::ordered_json out = {{"input", input}, {"output", output}, {"device", engine->device().name},
                                     {"backend", engine->device().backend}, {"reparam", report}, {"eval", evaluation},
-                                    {"pixels_vs_resize_at_equal_q", verdict}};
+                                    {"pixels_vs_resize_at_equal_q", verdict},
+                                    {"pixels_vs_resize_levels", {{"points", verdict_points}, {"ties", verdict_ties}}}};
       g.write_report(out);
       return 0;
     };
