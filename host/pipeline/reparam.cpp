@@ -255,10 +255,10 @@ perceptual::TriangleTarget target_of(const perceptual::TriangleResult& r, double
 // Whether any texture sampling the layout's images repeats along u (S) and v (T): only
 // then may a chart near one image edge be read across it from the far one (atlas::PackOptions).
 std::array<bool, 2> repeating_axes(const io::Asset& asset, const Layout& L) {
-  constexpr int kRepeat = 10497;
   std::array<bool, 2> r{false, false};
   for (int i : L.images)
-    for (const io::ImageUse& use : asset.images[size_t(i)].uses) r[0] |= use.wrap_s == kRepeat, r[1] |= use.wrap_t == kRepeat;
+    for (const io::ImageUse& use : asset.images[size_t(i)].uses)
+      r[0] |= use.wrap_s == atlas::kWrapRepeat, r[1] |= use.wrap_t == atlas::kWrapRepeat;
   return r;
 }
 
