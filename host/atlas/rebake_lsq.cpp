@@ -42,11 +42,14 @@ constexpr double kWeak = 4.0;
 }  // namespace
 
 Image rebake_least_squares(const Image& source, const std::vector<RebakeMesh>& meshes, const RebakeOptions& opt,
-                           const Image& area, LsqBakeStats* stats, const LsqBakeOptions& lsq) {
+                           const Image& area, LsqBakeStats* stats, const LsqBakeOptions& lsq,
+                           const std::vector<uint8_t>* keep) {
   const Stopwatch t_start;
   if (area.width != opt.width || area.height != opt.height || area.channels != source.channels ||
       area.pixels.size() != size_t(area.width) * area.height * area.channels)
     throw std::invalid_argument("rebake_least_squares: the area-filtered bake does not match the options and source");
+  if (keep && keep->size() != size_t(area.width) * area.height)
+    throw std::invalid_argument("rebake_least_squares: the kept-texel mask does not match the image");
   LsqBakeStats st;
   auto finish = [&](Image&& img) {
     st.seconds = t_start.seconds();
@@ -354,9 +357,10 @@ Image rebake_least_squares(const Image& source, const std::vector<RebakeMesh>& m
     solved[t] = 1;
   }
   if (opt.fill_gutter) {
-    // Texels the area bake covered but no sample reached (slivers) keep their value.
+    // Texels the start covered but no sample reached (slivers) keep their value, as do the
+    // texels `keep` marks (a surround).
     for (size_t t = 0; t < solved.size(); ++t)
-      if (plan.owner[t] != engine::kRebakeNoOwner) solved[t] = 1;
+      if (plan.owner[t] != engine::kRebakeNoOwner || (keep && (*keep)[t])) solved[t] = 1;
     fill_gutter(out, solved, opt.role == RebakeRole::Color);
   }
   st.solved = true;

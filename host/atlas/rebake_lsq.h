@@ -73,10 +73,15 @@ struct LsqBakeStats {
 
 // The least-squares bake of `source` into the layout `meshes` describe, as rebake() would
 // bake it with `options` (size, role, wrap modes, linear light); `area_baked` is rebake()'s
-// result for the same arguments (the start, and the values of every texel that is not
-// solved for). Returns an image like area_baked (same size, channels, bits). Throws
-// std::invalid_argument when area_baked does not match options and source.
+// result for the same arguments, or rebake_lanczos()'s (the start, and the values of every
+// texel that is not solved for). Returns an image like area_baked (same size, channels,
+// bits). `keep`, when given (width * height, as rebake_lanczos's `baked` with a surround):
+// texels marked 1 that are not solved for keep area_baked's values through the gutter
+// refill, so a surround (RebakeOptions::surround) survives the solve; without it, every
+// texel past the solved ring is refilled from the solved texels. Throws
+// std::invalid_argument when area_baked (or keep) does not match options and source.
 Image rebake_least_squares(const Image& source, const std::vector<RebakeMesh>& meshes, const RebakeOptions& options,
-                           const Image& area_baked, LsqBakeStats* stats = nullptr, const LsqBakeOptions& lsq = {});
+                           const Image& area_baked, LsqBakeStats* stats = nullptr, const LsqBakeOptions& lsq = {},
+                           const std::vector<uint8_t>* keep = nullptr);
 
 }  // namespace uvpress::atlas

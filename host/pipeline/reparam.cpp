@@ -20,6 +20,7 @@
 #include "io/image_io.h"
 #include "perceptual/mesh_stage.h"
 #include "perceptual/outline_fit.h"
+#include "perceptual/rate_allocation.h"
 #include "pipeline/injective_fit.h"
 #include "pipeline/texture_costs.h"
 #include "perceptual/triangle_view.h"
@@ -157,6 +158,9 @@ struct Prepared {
   std::vector<std::vector<uint32_t>> welded_of_vertex;  // per UV set: primitive vertex -> welded UV id
   std::vector<size_t> welded_count;
   std::vector<std::vector<perceptual::TriangleResult>> results;  // per UV set (empty without optimize)
+  // Per UV set and triangle: the isotropic scale of the equal-slope allocation at the
+  // requested cost (perceptual/rate_allocation.h); empty where it was not computed.
+  std::vector<std::vector<double>> equal_slope;
   double old_used = 0;  // eq. 20: source texels under the input's charts
   size_t rigid = 0;
   TriangleCounts tri;
@@ -229,6 +233,9 @@ struct Candidate {
   bool rotate = true;          // follow the triangle stage's rotations (false: R-bar = I, stretches only)
   bool exact = true;           // unreshaped charts keep their texels (atlas/place_texels.h), else resampled
   bool outline = false;        // reshaped charts keep their input outline (perceptual/outline_fit.h)
+  // Targets J = s I from the equal-slope allocation (Prepared::equal_slope) instead of the
+  // triangle stage's Jacobians (its weights are kept).
+  bool equal_slope = false;
 };
 
 // What one candidate came to, in the output file it was written into.
@@ -317,7 +324,15 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
       }
       std::vector<perceptual::TriangleTarget> targets;
       targets.reserve(ch.triangles.size());
-      for (uint32_t t : ch.triangles) targets.push_back(target_of(P.results[ch.uv_set][t], cand.floor, cand.rotate));
+      for (uint32_t t : ch.triangles) {
+        const perceptual::TriangleResult& r = P.results[ch.uv_set][t];
+        if (cand.equal_slope && !P.equal_slope.empty()) {
+          const double k = P.equal_slope[ch.uv_set][t];
+          targets.push_back({{1, 0, 0, 1}, {k, 0, 0, k}, r.weight_rotation, r.weight_stretch});
+        } else {
+          targets.push_back(target_of(r, cand.floor, cand.rotate));
+        }
+      }
       // A fit that runs the chart over itself is dropped for the input shape (injective_fit.h).
       InjectiveFit injective = fit_chart_injective(ch.uv, ch.local, targets, mesh_options);
       perceptual::MeshStageResult& fit = injective.fit;
@@ -567,11 +582,12 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
       const bool all_copied = copies && std::find(unit_exact.begin(), unit_exact.end(), 0) == unit_exact.end();
       atlas::RebakeStats coverage;
       Image baked = atlas::rebake(source, meshes, ro, &coverage, &engine);
-      if (cand.bake == Candidate::Bake::Lanczos && !all_copied)
-        baked = atlas::rebake_lanczos(source, meshes, ro, baked, &coverage.coverage);
+      // The least-squares bake starts from the Lanczos one and keeps its surround (the
+      // solve itself only reaches one texel past each chart).
+      if (!all_copied) baked = atlas::rebake_lanczos(source, meshes, ro, baked, &coverage.coverage);
       if (cand.bake == Candidate::Bake::LeastSquares && ro.role != atlas::RebakeRole::Normal) {
         atlas::LsqBakeStats lsq;
-        baked = atlas::rebake_least_squares(source, meshes, ro, baked, &lsq);
+        baked = atlas::rebake_least_squares(source, meshes, ro, baked, &lsq, {}, &coverage.coverage);
         if (!lsq.solved) warnings.push_back(cand.name + ": image " + std::to_string(i) + ": the least-squares bake did not converge");
       }
       // Unreshaped units: their texels copied from the source resized like a user would
@@ -813,6 +829,51 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
       }
     }
 
+    // The equal-slope allocation over the layout's optimized triangles (a candidate's
+    // targets): each triangle's loss at a few uniform shrinks, measured on its own views.
+    if (o.optimize && o.candidates && rate_scale > 0 && P.tri.optimized > 0) {
+      Stopwatch t0;
+      perceptual::LossCurves curves;
+      curves.scales = {0.125, 0.25, 0.35, 0.5, 0.6, 0.707, 0.85, 1.0};
+      std::vector<std::pair<size_t, uint32_t>> where;  // (UV set, triangle) per allocated triangle
+      std::vector<double> area, weight;
+      for (size_t si = 0; si < L.uv_sets.size(); ++si) {
+        if (P.results[si].empty()) continue;
+        const io::Primitive& prim = asset.primitives[size_t(L.uv_sets[si].primitive)];
+        const std::vector<float>& uv = prim.uv_sets[size_t(L.uv_sets[si].tex_coord)].uv;
+        std::vector<uint32_t> which;
+        for (uint32_t t = 0; t < P.results[si].size(); ++t)
+          if (P.results[si][t].evaluations > 0) which.push_back(t);
+        if (which.empty()) continue;
+        perceptual::TriangleViewInput in{prim.positions.data(), prim.vertex_count(), prim.indices.data(),
+                                         prim.triangle_count(), uv.data(), driver.width, driver.height};
+        std::vector<std::vector<double>> g;
+        for (double s : curves.scales)
+          g.push_back(s < 1 ? perceptual::measure_triangles(engine, in, luminance, o.triangle, {s, 0, 0, s}, which)
+                            : std::vector<double>());
+        for (size_t k = 0; k < which.size(); ++k) {
+          const perceptual::TriangleResult& r = P.results[si][which[k]];
+          where.push_back({si, which[k]});
+          area.push_back(std::max(r.texel_area, 1e-9));
+          // The triangle's share of the screen: its surface area.
+          const uint32_t* ix = &prim.indices[3 * size_t(which[k])];
+          const float* a = &prim.positions[3 * size_t(ix[0])];
+          const float* b = &prim.positions[3 * size_t(ix[1])];
+          const float* c = &prim.positions[3 * size_t(ix[2])];
+          const double e1[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, e2[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+          const double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+          weight.push_back(0.5 * std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]));
+          for (size_t j = 0; j < curves.scales.size(); ++j)
+            curves.loss.push_back(curves.scales[j] < 1 ? g[j][k] : r.identity_gmsd);
+        }
+      }
+      const double c = rate_scale * rate_scale;
+      const perceptual::RateAllocation alloc = perceptual::allocate_by_equal_slope(curves, area, weight, c);
+      P.equal_slope.assign(L.uv_sets.size(), {});
+      for (size_t si = 0; si < L.uv_sets.size(); ++si) P.equal_slope[si].assign(P.results[si].size(), 1.0);
+      for (size_t k = 0; k < where.size(); ++k) P.equal_slope[where[k].first][where[k].second] = alloc.scale[k];
+      t_triangle += t0.seconds();
+    }
     optimized += P.tri.optimized, infeasible += P.tri.optimized - P.tri.feasible;
   }
 
@@ -838,6 +899,14 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
     plans.push_back({"optimized-outline", true, 0.0, Candidate::Bake::Lanczos, true, true, true});
     plans.push_back({"stretch-only-outline", true, 0.0, Candidate::Bake::Lanczos, false, true, true});
     plans.push_back({"floor-0.5-outline", true, 0.5, Candidate::Bake::Lanczos, true, true, true});
+    // Isotropic targets that spend the budget where a texel buys the most loss back
+    // (perceptual/rate_allocation.h), free and in the input's outline.
+    bool equal_slope = false;
+    for (const Prepared& P : prepared) equal_slope |= !P.equal_slope.empty();
+    if (equal_slope) {
+      plans.push_back({"equal-slope", true, 0.0, Candidate::Bake::Lanczos, false, true, false, true});
+      plans.push_back({"equal-slope-outline", true, 0.0, Candidate::Bake::Lanczos, false, true, true, true});
+    }
   }
   if (!reshape || (o.max_gmsd <= 0 && o.candidates)) plans.push_back({"repack", false, 1.0});
   // Scored as written against the input, the input's layout and 20 views set up once.

@@ -5,6 +5,7 @@
 #include <catch2/catch.hpp>
 
 #include "atlas/rebake.h"
+#include "atlas/rebake_lanczos.h"
 #include "atlas/rebake_lsq.h"
 #include "core/image.h"
 
@@ -224,4 +225,48 @@ TEST_CASE("rebake_lsq: normal maps keep the area bake, mismatched inputs throw",
   Image wrong = b.area;
   wrong.width = 16;
   CHECK_THROWS_AS(atlas::rebake_least_squares(src, {L.mesh()}, o, wrong), std::invalid_argument);
+}
+
+TEST_CASE("rebake_lsq: a Lanczos start's surround survives the solve where `keep` marks it", "[atlas][lsq]") {
+  // A dark chart (the square [16, 48)^2 of a 64^2 white source) moved 3 texels right at the
+  // same density, as in rebake_lanczos's surround test: the chart covers x in [19, 51), and
+  // a surround of 4 bakes the source's white into x 15..18 and 51..54. The solve reaches
+  // the first ring (its targets, footprint filters past the edge, see white there too); the
+  // gutter past it is refilled from the solved texels, which near the image origin's 4x4
+  // blocks mixes in the chart's dark at x 15 (0.63). With `keep` every surround texel keeps
+  // the Lanczos start's white.
+  Image src;
+  src.width = src.height = 64, src.channels = 3;
+  src.pixels.assign(64 * 64 * 3, 1.0f);
+  for (uint32_t y = 16; y < 48; ++y)
+    for (uint32_t x = 16; x < 48; ++x)
+      for (uint32_t c = 0; c < 3; ++c) src.at(x, y, c) = 0.1f;
+  const std::vector<uint32_t> idx{0, 1, 2, 0, 2, 3};
+  const std::vector<float> old_uv{0.25f, 0.25f, 0.75f, 0.25f, 0.75f, 0.75f, 0.25f, 0.75f};
+  const std::vector<float> new_uv{0.25f + 3 / 64.f, 0.25f, 0.75f + 3 / 64.f, 0.25f, 0.75f + 3 / 64.f, 0.75f, 0.25f + 3 / 64.f, 0.75f};
+  const RebakeMesh mesh{idx.data(), idx.size(), old_uv.data(), new_uv.data(), 4};
+  RebakeOptions o;
+  o.width = o.height = 64;
+  o.role = RebakeRole::Data;
+  o.surround = 4;
+  const Image area = atlas::rebake(src, {mesh}, o);
+  std::vector<uint8_t> baked;
+  const Image start = atlas::rebake_lanczos(src, {mesh}, o, area, &baked);
+  atlas::LsqBakeStats stats;
+  const Image kept = atlas::rebake_least_squares(src, {mesh}, o, start, &stats, {}, &baked);
+  const Image plain = atlas::rebake_least_squares(src, {mesh}, o, start);
+  REQUIRE(stats.solved);
+  for (uint32_t y = 20; y < 44; ++y) {
+    for (uint32_t x : {15u, 16u, 17u, 18u, 51u, 52u, 53u, 54u}) {
+      INFO("x " << x << " y " << y);
+      CHECK(kept.at(x, y, 0) > 0.95f);
+      CHECK(baked[size_t(y) * 64 + x] == 1);
+    }
+    CHECK(plain.at(15, y, 0) < 0.9f);  // refilled: not the source's white
+    CHECK(kept.at(30, y, 0) == Approx(0.1f).margin(2e-3));  // the chart's texels are solved the same
+    CHECK(kept.at(30, y, 0) == plain.at(30, y, 0));
+    CHECK(kept.at(58, y, 0) == plain.at(58, y, 0));  // past the surround: the same refill
+  }
+  std::vector<uint8_t> wrong(7, 1);
+  CHECK_THROWS_AS(atlas::rebake_least_squares(src, {mesh}, o, start, nullptr, {}, &wrong), std::invalid_argument);
 }
