@@ -158,9 +158,15 @@ struct Prepared {
   std::vector<std::vector<uint32_t>> welded_of_vertex;  // per UV set: primitive vertex -> welded UV id
   std::vector<size_t> welded_count;
   std::vector<std::vector<perceptual::TriangleResult>> results;  // per UV set (empty without optimize)
-  // Per UV set and triangle: the isotropic scale of the equal-slope allocation at the
-  // requested cost (perceptual/rate_allocation.h); empty where it was not computed.
-  std::vector<std::vector<double>> equal_slope;
+  // The equal-slope allocation's input (perceptual/rate_allocation.h): each optimized
+  // triangle's loss at a few uniform shrinks, its area and screen weight, at the requested
+  // cost (0: not measured).
+  struct RateCurves {
+    perceptual::LossCurves curves;
+    std::vector<double> area, weight;
+    std::vector<std::pair<size_t, uint32_t>> where;  // (UV set, triangle) per entry
+    double cost = 0;
+  } rate;
   double old_used = 0;  // eq. 20: source texels under the input's charts
   size_t rigid = 0;
   TriangleCounts tri;
@@ -233,7 +239,7 @@ struct Candidate {
   bool rotate = true;          // follow the triangle stage's rotations (false: R-bar = I, stretches only)
   bool exact = true;           // unreshaped charts keep their texels (atlas/place_texels.h), else resampled
   bool outline = false;        // reshaped charts keep their input outline (perceptual/outline_fit.h)
-  // Targets J = s I from the equal-slope allocation (Prepared::equal_slope) instead of the
+  // Targets J = s I from the equal-slope allocation (Prepared::rate) instead of the
   // triangle stage's Jacobians (its weights are kept).
   bool equal_slope = false;
 };
@@ -298,6 +304,19 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
     const double W = P.W, H = P.H;
     json& jl = out.layouts[li];
     size_t layout_flips = 0, mesh_failed = 0, overlap_fallback_pairs = 0, outline_kept = 0, outline_failed = 0;
+    // Equal-slope targets: the allocation at this candidate's budget.
+    std::vector<std::vector<double>> slope_scale;
+    if (cand.equal_slope && P.rate.cost > 0) {
+      const perceptual::RateAllocation alloc =
+          perceptual::allocate_by_equal_slope(P.rate.curves, P.rate.area, P.rate.weight, P.rate.cost);
+      slope_scale.resize(L.uv_sets.size());
+      for (size_t si = 0; si < L.uv_sets.size(); ++si) slope_scale[si].assign(P.results[si].size(), 1.0);
+      for (size_t k = 0; k < P.rate.where.size(); ++k) slope_scale[P.rate.where[k].first][P.rate.where[k].second] = alloc.scale[k];
+      jl["equal_slope"] = {{"cost", P.rate.cost},  // share of the source's texels under the triangles
+                           {"spent", alloc.spent},
+                           {"multiplier", alloc.multiplier},
+                           {"scale_quartiles", {quantile(alloc.scale, 0.25), quantile(alloc.scale, 0.5), quantile(alloc.scale, 0.75)}}};
+    }
     double outline_blend = 0;
 
     // Mesh stage per chart. Weights floored relative to the whole layout's mean (not only
@@ -326,8 +345,8 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
       targets.reserve(ch.triangles.size());
       for (uint32_t t : ch.triangles) {
         const perceptual::TriangleResult& r = P.results[ch.uv_set][t];
-        if (cand.equal_slope && !P.equal_slope.empty()) {
-          const double k = P.equal_slope[ch.uv_set][t];
+        if (!slope_scale.empty()) {
+          const double k = slope_scale[ch.uv_set][t];
           targets.push_back({{1, 0, 0, 1}, {k, 0, 0, k}, r.weight_rotation, r.weight_stretch});
         } else {
           targets.push_back(target_of(r, cand.floor, cand.rotate));
@@ -867,11 +886,9 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
             curves.loss.push_back(curves.scales[j] < 1 ? g[j][k] : r.identity_gmsd);
         }
       }
-      const double c = rate_scale * rate_scale;
-      const perceptual::RateAllocation alloc = perceptual::allocate_by_equal_slope(curves, area, weight, c);
-      P.equal_slope.assign(L.uv_sets.size(), {});
-      for (size_t si = 0; si < L.uv_sets.size(); ++si) P.equal_slope[si].assign(P.results[si].size(), 1.0);
-      for (size_t k = 0; k < where.size(); ++k) P.equal_slope[where[k].first][where[k].second] = alloc.scale[k];
+      P.rate.curves = std::move(curves), P.rate.area = std::move(area), P.rate.weight = std::move(weight);
+      P.rate.where = std::move(where);
+      P.rate.cost = rate_scale * rate_scale;
       t_triangle += t0.seconds();
     }
     optimized += P.tri.optimized, infeasible += P.tri.optimized - P.tri.feasible;
@@ -902,7 +919,7 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
     // Isotropic targets that spend the budget where a texel buys the most loss back
     // (perceptual/rate_allocation.h), free and in the input's outline.
     bool equal_slope = false;
-    for (const Prepared& P : prepared) equal_slope |= !P.equal_slope.empty();
+    for (const Prepared& P : prepared) equal_slope |= P.rate.cost > 0;
     if (equal_slope) {
       plans.push_back({"equal-slope", true, 0.0, Candidate::Bake::Lanczos, false, true, false, true});
       plans.push_back({"equal-slope-outline", true, 0.0, Candidate::Bake::Lanczos, false, true, true, true});
@@ -947,7 +964,6 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
   auto consider = [&](const Candidate& c) {
     io::GltfFile f = original;
     Realized r = realize(asset, layouts, prepared, layout_base, f, engine, o, c, progress, warnings);
-    if (scorer && r.overlaps_new == 0) r.q = score(f).q;
     candidates.push_back({{"name", r.name},
                           {"cost_ratio", r.old_texels > 0 ? r.new_texels / r.old_texels : 1.0},
                           {"q", r.q >= 0 ? json(r.q) : json(nullptr)},
