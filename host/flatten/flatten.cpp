@@ -138,6 +138,7 @@ Result flatten(const Mesh& mesh, const Options& o) {
   const std::vector<double> uniform_w(nt, 1.0 / double(nt));
   Solver solver(p);
   solver.break_factorization(o.test_break_factorization);
+  if (o.test_pcg_budget >= 0) solver.set_pcg_budget(o.test_pcg_budget);
 
   Result r;
   r.degenerate_references = p.degenerate;
@@ -167,6 +168,8 @@ Result flatten(const Mesh& mesh, const Options& o) {
 
     StepStats s = solver.step(uv, in_progressive ? ref : p.ideal, in_progressive ? uniform_w : area_w,
                               slim ? Proxy::Slim : Proxy::Cm, in_progressive ? 0.0 : o.gradient_tolerance);
+    r.factorizations += s.factorized;
+    r.pcg_iterations += s.pcg_iterations;
     if (s.below_gradient_tolerance) {
       r.stop = StopReason::GradientNorm;
       break;
@@ -210,6 +213,7 @@ Result flatten(const Mesh& mesh, const Options& o) {
     rec.gradient_norm = s.gradient_norm;
     rec.objective_before = s.energy_before, rec.objective_after = s.energy_after;
     rec.inverted = a.inverted;
+    rec.factorized = s.factorized, rec.pcg_iterations = s.pcg_iterations;
     rec.t_gradient = s.t_gradient + t_reference + t_analyze.seconds();
     rec.t_assembly = s.t_assembly, rec.t_factorization = s.t_factorization, rec.t_solve = s.t_solve;
     rec.t_line_search = s.t_line_search;

@@ -66,6 +66,8 @@ struct IterationRecord {
   double gradient_norm = 0;    // of the objective that was minimized, before the step
   double objective_before = 0, objective_after = 0;  // that objective ((4) or (5)) around the step
   size_t inverted = 0;         // triangles with det J <= 0 after the step (always 0)
+  bool factorized = false;     // the step factorized its system (else PCG on an earlier factor)
+  int pcg_iterations = 0;      // PCG iterations the step spent (a failed attempt included)
   // Seconds: per-triangle energy, gradient, SVD and references; per-triangle Hessian
   // proxies and sparse assembly; numeric factorization; triangular solves; line search.
   double t_gradient = 0, t_assembly = 0, t_factorization = 0, t_solve = 0, t_line_search = 0, t_total = 0;
@@ -82,6 +84,10 @@ struct Options {
   // Test hook: the n-th numeric factorization (1-based; 0 = none) sees the system negated,
   // so CHOLMOD fails on it as on a matrix that is not positive definite.
   int test_break_factorization = 0;
+  // Test hook: PCG iterations a solve may spend on an earlier factorization before
+  // refactorizing; -1 keeps the budget the sparse system derives from the mesh (0 on small
+  // meshes), a positive value forces the reuse path on a small test mesh.
+  int test_pcg_budget = -1;
 };
 
 struct Result {
@@ -89,6 +95,8 @@ struct Result {
   // Vertices no triangle uses get (0, 0).
   std::vector<double> uv;
   int iterations = 0;           // N_c: linear solves
+  int factorizations = 0;       // numeric factorizations among them (the rest: PCG, see sparse_system.h)
+  long pcg_iterations = 0;
   StopReason stop = StopReason::MaxIterations;
   bool converged = false;       // is_convergence(stop)
   std::string stop_reason;      // to_string(stop): what the reports carry ("stop")

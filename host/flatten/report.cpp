@@ -29,6 +29,8 @@ nlohmann::ordered_json summary_json(const Result& r, Method method, size_t faces
   double tg = 0, ta = 0, tf = 0, ts = 0, tl = 0;
   for (const auto& rec : r.log)
     tg += rec.t_gradient, ta += rec.t_assembly, tf += rec.t_factorization, ts += rec.t_solve, tl += rec.t_line_search;
+  j["factorizations"] = r.factorizations;
+  j["pcg_iterations"] = r.pcg_iterations;
   j["seconds"] = {{"gradient", tg}, {"assembly", ta}, {"factorization", tf}, {"solve", ts}, {"line_search", tl}};
   int progressive = 0, slim = 0;
   for (const auto& rec : r.log) {
@@ -44,7 +46,7 @@ nlohmann::ordered_json summary_json(const Result& r, Method method, size_t faces
 namespace {
 const char* kColumns[] = {"iteration", "phase", "energy", "relative_change", "max_distortion", "fraction_bounded",
                           "t_com", "step", "max_step", "gradient_norm", "t_gradient", "t_assembly",
-                          "t_factorization", "t_solve", "t_line_search", "t_total"};
+                          "t_factorization", "t_solve", "t_line_search", "t_total", "factorized", "pcg_iterations"};
 
 nlohmann::ordered_json record_json(const IterationRecord& r) {
   return {{"iteration", r.iteration}, {"phase", r.phase},
@@ -54,7 +56,8 @@ nlohmann::ordered_json record_json(const IterationRecord& r) {
           {"max_step", r.max_step},   {"gradient_norm", r.gradient_norm},
           {"t_gradient", r.t_gradient}, {"t_assembly", r.t_assembly},
           {"t_factorization", r.t_factorization}, {"t_solve", r.t_solve},
-          {"t_line_search", r.t_line_search}, {"t_total", r.t_total}};
+          {"t_line_search", r.t_line_search}, {"t_total", r.t_total},
+          {"factorized", r.factorized}, {"pcg_iterations", r.pcg_iterations}};
 }
 }  // namespace
 
@@ -66,10 +69,10 @@ std::string log_csv(const std::vector<LabelledLog>& logs) {
   char buf[512];
   for (const auto& l : logs)
     for (const auto& r : *l.log) {
-      std::snprintf(buf, sizeof buf, "%s,%d,%s,%.17g,%.6g,%.9g,%.6f,%.9g,%.9g,%.9g,%.6g,%.6f,%.6f,%.6f,%.6f,%.6f,%.6f\n",
+      std::snprintf(buf, sizeof buf, "%s,%d,%s,%.17g,%.6g,%.9g,%.6f,%.9g,%.9g,%.9g,%.6g,%.6f,%.6f,%.6f,%.6f,%.6f,%.6f,%d,%d\n",
                     l.label.c_str(), r.iteration, r.phase, r.energy, r.relative_change, r.max_distortion,
                     r.fraction_bounded, r.t_com, r.step, r.max_step, r.gradient_norm, r.t_gradient, r.t_assembly,
-                    r.t_factorization, r.t_solve, r.t_line_search, r.t_total);
+                    r.t_factorization, r.t_solve, r.t_line_search, r.t_total, int(r.factorized), r.pcg_iterations);
       out << buf;
     }
   return out.str();

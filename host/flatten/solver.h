@@ -2,7 +2,8 @@
 // (4) with progressive references and uniform weights, or problem (5) with the ideal
 // references and area weights - by SLIM or CM: per-triangle gradient and 4x4 Hessian
 // proxy (OpenMP, static schedule), gather into the fixed sparse pattern, CHOLMOD numeric
-// factorization and solve, then the flip-free line search. Paper §3.5-3.6: one step per
+// factorization and solve (or PCG on an earlier factorization, see sparse_system.h), then
+// the flip-free line search. Paper §3.5-3.6: one step per
 // reference update; the iteration count N_c is the number of linear solves.
 #pragma once
 
@@ -27,6 +28,8 @@ struct StepStats {
                                 // room to move (maximal step 0)
   bool factorization_failed = false;  // the linear system could not be factorized (see failure)
   const char* failure = "";     // SparseSystem::failure() when factorization_failed
+  bool factorized = false;      // the step factorized its system (else PCG on an old factor)
+  int pcg_iterations = 0;
   double t_gradient = 0, t_assembly = 0, t_factorization = 0, t_solve = 0, t_line_search = 0;
 };
 
@@ -44,6 +47,8 @@ class Solver {
                  double gradient_tolerance);
 
   size_t nonzeros() const { return system_.nonzeros(); }
+  // Test hook: see SparseSystem::set_pcg_budget.
+  void set_pcg_budget(int iterations) { system_.set_pcg_budget(iterations); }
   // Test hook: see SparseSystem::break_factorization.
   void break_factorization(int n) { system_.break_factorization(n); }
 

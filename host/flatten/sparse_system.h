@@ -2,11 +2,23 @@
 // (dof 2i = u_i, 2i+1 = v_i). The sparsity pattern depends on the connectivity only, so it
 // is built, and CHOLMOD's symbolic analysis (ordering, supernodes) done, once per mesh;
 // every iteration then assembles values into the fixed pattern and refactorizes
-// numerically (supernodal LLT on OpenBLAS).
+// numerically (supernodal LLT on OpenBLAS) or reuses an earlier factor (below).
 //
 // Assembly is a gather, not a scatter: for every stored nonzero, the list of per-triangle
 // Hessian entries that add into it, in triangle order. Parallel over nonzeros, and the
 // sums come out bit-identical whatever the thread count. Same for the gradient, per vertex.
+//
+// Factorization reuse: H changes slowly from one iteration to the next, and at 10^4-10^6
+// faces its numeric factorization is nearly the whole cost of a step (camelhead-s2: 87 %).
+// solve_reusing() therefore solves with preconditioned conjugate gradients, the
+// preconditioner being the factor of an earlier H, and refactorizes only when PCG does not
+// reach its tolerance within a budget of iterations that costs a fraction of one
+// factorization. A PCG iteration is a pair of triangular solves, memory-bound: a
+// factorization costs only 10-13 of them, so the gain is bounded (README, "flatten at
+// scale"). The budget is fixed from CHOLMOD's flop and fill counts at analysis time, not
+// from timings, so the sequence of factorizations and PCG iterations - and every bit of
+// the result - is the same on every machine and for every thread count. Small meshes get a budget of 0: a factorization
+// there costs a few solves, and the direct path is kept bit for bit.
 //
 // Translation null space: E is invariant under translating all UVs, so H has the two
 // translations in its kernel (and grad E is orthogonal to them). Vertex 0 is pinned: its
@@ -47,10 +59,26 @@ class SparseSystem {
   // assembled matrix first, so that CHOLMOD itself meets a matrix that is not positive
   // definite - a deterministic stand-in for the numerical breakdowns real inputs cause.
   void break_factorization(int n) { break_at_ = n; }
-  // Solves H d = -grad with vertex 0 pinned.
+  // Solves H d = -grad with vertex 0 pinned, by the last factorization.
   void solve(const std::vector<double>& grad, std::vector<double>& d);
+  // Solves H d = -grad for the assembled H, vertex 0 pinned: PCG on the last factorization
+  // (started from d = 0, so every iterate is a descent direction of the quadratic model)
+  // until the preconditioned residual norm falls by `tolerance`; when the budget runs out,
+  // or there is no factor yet, factorizes H and solves directly. Returns false when that
+  // factorization fails (failure() says why).
+  struct SolveStats {
+    bool factorized = false;  // H was factorized (after PCG ran out of budget, or with no factor yet)
+    int pcg_iterations = 0;   // spent in this call, whether or not PCG converged
+    double t_factorization = 0, t_solve = 0;  // seconds; t_solve includes PCG
+  };
+  bool solve_reusing(const std::vector<double>& grad, std::vector<double>& d, double tolerance, SolveStats& stats);
 
   size_t nonzeros() const { return size_t(matrix_.nonZeros()); }
+  int factorizations() const { return factorizations_; }
+  long pcg_iterations() const { return pcg_iterations_; }
+  int pcg_budget() const { return pcg_budget_; }
+  // Overrides the budget fixed at analysis (tests: force the PCG path on small meshes).
+  void set_pcg_budget(int iterations) { pcg_budget_ = iterations; }
 
  private:
   size_t n_;  // dofs
@@ -62,6 +90,19 @@ class SparseSystem {
   double diagonal_mean_ = 1;
   std::string failure_;
   int factorizations_ = 0, break_at_ = 0;
+  int pcg_budget_ = 0;
+  long pcg_iterations_ = 0;
+  bool factored_ = false;  // solver_ holds the factor of some earlier H
+  bool skip_attempt_ = false;  // the last PCG attempt failed
+  std::vector<double> r_, z_, p_, q_;  // PCG work vectors
+
+  double shift() const { return 1e-10 * diagonal_mean_; }
+  // y = (H + shift) x for the lower triangle stored in matrix_: sequential, fixed order.
+  void multiply(const std::vector<double>& x, std::vector<double>& y) const;
+  // z = the last factor's inverse applied to r.
+  void precondition(const std::vector<double>& r, std::vector<double>& z);
+  // PCG from d = 0; true when it converged within the budget.
+  bool pcg(const std::vector<double>& grad, std::vector<double>& d, double tolerance);
 };
 
 // Determinism: OpenBLAS splits the supernodal kernels differently for different thread
