@@ -2,10 +2,13 @@
 # Installs everything uvpress needs to build, test and run its demo on Debian bookworm:
 # Debian packages through apt-get (gnuplot-nox draws eval's plot; chromium lets the eval
 # HTML test load the report headless; slurmctld, slurmd and munge run the batch test's
-# one-node cluster on loopback; clang and libclang-rt-14-dev build the libFuzzer targets),
-# and, from npm into tools/node_modules (project-local, never global, exact versions in
-# tools/package.json): the Khronos glTF validator and three.js (tests/client renders inputs
-# and outputs with its GLTFLoader in headless Chromium). Idempotent: when everything is
+# one-node cluster on loopback; clang and libclang-rt-14-dev build the libFuzzer targets;
+# libastcenc-dev is the ASTC codec of --texture-format astc and eval --codec, and the
+# astcenc command decodes the KTX2 files in the tests), and, from npm into
+# tools/node_modules (project-local, never global, exact versions in tools/package.json):
+# the Khronos glTF validator, three.js (tests/client renders inputs and outputs with its
+# GLTFLoader in headless Chromium) and ktx-parse (the tests read uvpress's KTX2 files with
+# it, tools/ktx2-inspect.mjs). Idempotent: when everything is
 # present it only checks and returns.
 set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
@@ -16,6 +19,7 @@ packages=(
   libeigen3-dev libsuitesparse-dev libopenblas-dev
   libtinygltf-dev nlohmann-json3-dev libstb-dev
   libopenimageio-dev openimageio-tools libpng-dev libjpeg62-turbo-dev libimagequant-dev
+  libastcenc-dev astcenc
   catch2 libcli11-dev libnlopt-cxx-dev
   gnuplot-nox chromium
   slurmctld slurmd slurm-client munge
@@ -41,16 +45,17 @@ if [ ${#missing[@]} -gt 0 ]; then
   $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
 fi
 
-# Khronos glTF validator (a library; tools/validate-gltf.mjs drives it) and three.js (the
-# real-client check, tests/client). Reinstalled when either is missing or three's version is
-# not the pinned one.
+# Khronos glTF validator (a library; tools/validate-gltf.mjs drives it), three.js (the
+# real-client check, tests/client) and ktx-parse (tools/ktx2-inspect.mjs). Reinstalled when
+# one is missing or three's version is not the pinned one.
 three_pinned="$(sed -n 's/.*"three": *"\([^"]*\)".*/\1/p' "$here/package.json")"
 three_have=""
 if [ -f "$here/node_modules/three/package.json" ]; then
   three_have="$(sed -n 's/^ *"version": *"\([^"]*\)".*/\1/p' "$here/node_modules/three/package.json" | head -1)"
 fi
-if [ ! -f "$here/node_modules/gltf-validator/package.json" ] || [ "$three_have" != "$three_pinned" ]; then
-  echo "install-deps: installing gltf-validator and three from npm into tools/node_modules" >&2
+if [ ! -f "$here/node_modules/gltf-validator/package.json" ] || [ ! -f "$here/node_modules/ktx-parse/package.json" ] ||
+  [ "$three_have" != "$three_pinned" ]; then
+  echo "install-deps: installing gltf-validator, three and ktx-parse from npm into tools/node_modules" >&2
   (cd "$here" && npm install --no-audit --no-fund --silent >/dev/null)
 fi
 echo "install-deps: ok" >&2

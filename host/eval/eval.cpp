@@ -167,11 +167,18 @@ struct Texture {
 // `image` as eval's views sample it: its luminance (GMSD step 1 on the stored values),
 // or with rgb its colour; with the trilinear filter the luminance of each level of the
 // chain an engine would build (mip_chain: box in linear light), as a viewer sees it.
-Texture view_texture(const Image& image, TextureFilter filter, bool rgb = false) {
+// With `codec`, each level is compressed and decoded again first (EvalOptions::codec).
+Texture view_texture(const Image& image, TextureFilter filter, bool rgb = false, const io::AstcOptions* codec = nullptr) {
   Texture t;
   t.width = image.width, t.height = image.height, t.channels = rgb ? 3 : 1;
   t.levels = filter == TextureFilter::Trilinear ? engine::mip_chain_levels(image.width, image.height) : 1;
-  for (const Image& level : mip_chain(image, t.levels)) {
+  std::optional<io::AstcCodec> astc;
+  if (codec) astc.emplace(true, *codec);
+  for (Image level : mip_chain(image, t.levels)) {
+    if (astc) {
+      const auto blocks = astc->compress(level);
+      level = astc->decompress(blocks.data(), blocks.size(), level.width, level.height, level.channels);
+    }
     if (rgb) {
       for (size_t i = 0; i < size_t(level.width) * level.height; ++i)
         for (uint32_t c = 0; c < 3; ++c) t.texels.push_back(level.pixels[i * level.channels + std::min(c, level.channels - 1)]);
@@ -273,6 +280,7 @@ struct Setup {
   std::vector<float> ref_views;  // views x res x res luminance
   double image_texels = 0, chart_texels = 0;
   double radius = 0;  // the largest extent of the bounding box
+  std::optional<io::AstcOptions> codec;  // EvalOptions::codec
 };
 
 // Mean GMSD of `m` textured with `texture` against the reference views (per view in
@@ -293,6 +301,24 @@ double score_views(engine::Engine& engine, const Setup& s, const LayoutMesh& m, 
   q /= double(g.size());
   if (per_view) *per_view = std::move(g);
   return q;
+}
+
+// `image` as the curves and as-written scores sample it: after the codec, if any.
+Texture codec_view_texture(const Setup& s, const Image& image, Timing& timing) {
+  const Stopwatch t0;
+  Texture tex = view_texture(image, s.filter, false, s.codec ? &*s.codec : nullptr);
+  timing.textures += t0.seconds();
+  return tex;
+}
+
+// ASTC bytes of `image`'s levels as the views sample them (0 without a codec).
+uint64_t codec_bytes(const Setup& s, uint32_t width, uint32_t height) {
+  if (!s.codec) return 0;
+  const uint32_t levels = s.filter == TextureFilter::Trilinear ? engine::mip_chain_levels(width, height) : 1;
+  uint64_t n = 0;
+  for (uint32_t l = 0; l < levels; ++l)
+    n += io::astc_bytes(std::max(1u, width >> l), std::max(1u, height >> l), s.codec->block_x, s.codec->block_y);
+  return n;
 }
 
 // `image` as the views sample it (view_texture), timed.
@@ -449,6 +475,7 @@ Setup set_up(const io::GltfFile& reference, engine::Engine& engine, const EvalOp
       s.resolution.noise_floor = std::max(s.resolution.noise_floor, std::abs(score_views(engine, s, ref, next, timing) - q));
     }
   }
+  s.codec = o.codec;  // after the reference views and the noise floor: those stay uncompressed
   return s;
 }
 
@@ -458,7 +485,7 @@ Scored score_own(engine::Engine& engine, const Setup& s, const LayoutMesh& own, 
   const double texels = double(own.full.width) * own.full.height;
   r.c_r = texels / s.image_texels;
   r.c_r_chart = texels * own.uv_area / s.chart_texels;
-  r.q = score_views(engine, s, own, own.full, timing, &r.q_views);
+  r.q = score_views(engine, s, own, codec_view_texture(s, own.full, timing), timing, &r.q_views);
   return r;
 }
 
@@ -672,6 +699,12 @@ nlohmann::ordered_json evaluate(const io::GltfFile& reference, const std::vector
                          {"height", ref.full.height}, {"uv_area", ref.uv_area}, {"image_texels", s.image_texels},
                          {"chart_texels", s.chart_texels}};
   report["cost_measure"] = "image_texels";
+  if (o.codec)
+    report["codec"] = {{"name", "astc-" + io::block_name(*o.codec)},
+                       {"quality", io::to_string(o.codec->quality)},
+                       {"bits_per_texel", 128.0 / (o.codec->block_x * o.codec->block_y)}};
+  else
+    report["codec"] = nullptr;
   report["cost_grid"] = o.cost_grid;
   report["contact_c_r"] = contact;
 
@@ -697,11 +730,12 @@ nlohmann::ordered_json evaluate(const io::GltfFile& reference, const std::vector
       const Image tex = resize(m.full, W, H);
       timing.textures += t0.seconds();
       std::vector<float> g;
-      const double q = score_views(engine, s, m, tex, timing, &g);
+      const double q = score_views(engine, s, m, codec_view_texture(s, tex, timing), timing, &g);
       const double actual = double(W) * H / s.image_texels;
       const double chart = double(W) * H * m.uv_area / s.chart_texels;
       c.points.push_back({{"c_r", c_r}, {"c_r_actual", actual}, {"c_r_chart", chart}, {"r", W}, {"width", W},
                           {"height", H}, {"q", q}, {"q_views", g}});
+      if (s.codec) c.points.back()["codec_bytes"] = codec_bytes(s, W, H);
       c.cq.push_back({actual, q});
       c.mean_log_q += std::log(std::max(q, 1e-9)) / double(o.cost_grid.size());  // q = 0: a perfect copy
     }

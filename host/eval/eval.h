@@ -57,10 +57,18 @@
 // - Savings: for a layout A against B, the ratio c_A(q) / c_B(q) of the costs at which the
 //   two curves reach the same q, log-log interpolated, geometric mean over B's curve
 //   points inside A's q range.
+// - Codec (`codec`, `--codec astc-6x6`): the textures the curves and the as-written scores
+//   sample are first compressed and decoded again, every mip level on its own (the chain
+//   built from the uncompressed level 0, then each level compressed, as a texture farm
+//   does), sRGB profile (the driving texture is a colour texture): q after the codec, so
+//   that curves compare at equal compressed bytes (with one codec, bytes go with texels;
+//   each curve point carries `codec_bytes`, its levels' blocks). The reference views and
+//   the noise floor stay uncompressed.
 #pragma once
 
 #include "core/image.h"
 #include "engine.h"
+#include "io/astc_codec.h"
 #include "io/gltf_io.h"
 #include "resize.h"
 
@@ -95,6 +103,7 @@ struct EvalOptions {
   uint32_t thumbnail = 160;   // contact sheet view size, pixels
   bool artifacts = true;      // keep what write_html_report needs (contact sheets, UV plots)
   double fov_degrees = 30;
+  std::optional<io::AstcOptions> codec;  // q after ASTC compression (see above); none: uncompressed
 };
 
 // One layout to evaluate: a loaded glTF of the same mesh as the reference.

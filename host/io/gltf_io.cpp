@@ -3,12 +3,15 @@
 #include "core/error.h"
 #include "io/atomic_file.h"
 #include "io/image_io.h"
+#include "io/ktx2.h"
 
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <cctype>
+#include <cstdio>
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <set>
 #include <sstream>
@@ -26,6 +29,12 @@ bool is_supported_required_extension(const std::string& name) {
       "KHR_materials_clearcoat", "KHR_materials_sheen", "KHR_materials_iridescence", "KHR_materials_variants",
       "KHR_lights_punctual"};
   return supported.count(name) > 0;
+}
+
+uint64_t image_fingerprint(const std::vector<uint8_t>& bytes) {
+  uint64_t h = 1469598103934665603ull;
+  for (uint8_t b : bytes) h = (h ^ b) * 1099511628211ull;
+  return h;
 }
 
 bool is_gltf_output_path(const std::string& path) {
@@ -118,6 +127,43 @@ bool looks_binary(const std::vector<uint8_t>& head) {
 
 }  // namespace
 
+namespace {
+
+constexpr const char* kKtx2Key = "uvpress_ktx2";
+
+std::string fingerprint_text(uint64_t h) {
+  char text[32];
+  std::snprintf(text, sizeof text, "fnv1a64:%016llx", (unsigned long long)h);
+  return text;
+}
+
+// Each image's KTX2 copy named in its extras (what save_gltf writes), read through the same
+// reference checks as image files; the key is removed from the model either way, so that a
+// copy that is dropped is not named in the output.
+void read_ktx2_sidecars(GltfFile& file, const RefPolicy& refs) {
+  file.image_ktx2.assign(file.model.images.size(), {});
+  for (size_t i = 0; i < file.model.images.size(); ++i) {
+    auto& extras = file.model.images[i].extras;
+    if (!extras.IsObject() || !extras.Has(kKtx2Key)) continue;
+    const tinygltf::Value entry = extras.Get(kKtx2Key);
+    extras.Get<tinygltf::Value::Object>().erase(kKtx2Key);
+    if (extras.Get<tinygltf::Value::Object>().empty()) extras = tinygltf::Value();
+    if (!entry.IsObject() || !entry.Get("uri").IsString() || !entry.Get("source").IsString()) continue;
+    if (entry.Get("source").Get<std::string>() != fingerprint_text(image_fingerprint(file.image_bytes[i]))) continue;
+    // Optional: a copy that is missing, refused by the reference rule or not a KTX2 file that
+    // reads is dropped (the glTF is whole without it), never read past the checks.
+    try {
+      OpenRef ref = open_ref(file.path, {"image " + std::to_string(i) + " KTX2", entry.Get("uri").Get<std::string>(), false, -1}, refs);
+      std::vector<uint8_t> bytes = ref.file.read_all();
+      read_ktx2(bytes, file.path);
+      file.image_ktx2[i] = {std::move(bytes), image_fingerprint(file.image_bytes[i])};
+    } catch (const InputError&) {
+    }
+  }
+}
+
+}  // namespace
+
 GltfFile load_gltf(const std::string& path, const RefPolicy& refs) {
   std::vector<uint8_t> bytes = read_file(path);
   if (bytes.empty()) throw InputError(path, "file is empty");
@@ -176,6 +222,7 @@ GltfFile load_gltf(const std::string& path, const RefPolicy& refs) {
       throw InputError(path, image_label(image, i) + ": " + e.what());
     }
   }
+  read_ktx2_sidecars(file, refs);
   return file;
 }
 
@@ -203,6 +250,31 @@ std::string safe_name(std::string s) {
   for (auto& c : s)
     if (!std::isalnum(static_cast<unsigned char>(c)) && c != '-' && c != '_' && c != '.') c = '_';
   return s;
+}
+
+// Each image's KTX2 copy that still matches its bytes, written as dir/<name> and named in
+// the image's extras; `unique` picks the file name.
+void write_ktx2_sidecars(const GltfFile& file, tinygltf::Model& m, const fs::path& dir, const std::string& stem,
+                         AtomicWriter& writer, const std::function<std::string(std::string)>& unique) {
+  for (size_t i = 0; i < m.images.size() && i < file.image_ktx2.size(); ++i) {
+    const Ktx2Sidecar& k = file.image_ktx2[i];
+    if (k.bytes.empty() || k.source != image_fingerprint(file.image_bytes[i])) continue;
+    const auto& image = file.model.images[i];
+    std::string base = image.uri.empty() || image.uri.rfind("data:", 0) == 0 ? "" : fs::path(image.uri).stem().string();
+    if (base.rfind(stem + "_", 0) == 0) base = base.substr(stem.size() + 1);  // a uvpress output's own name
+    if (base.empty()) base = image.name.empty() ? "image" + std::to_string(i) : image.name;
+    const std::string name = unique(stem + "_" + base + ".ktx2");
+    writer.add((dir / name).string(), k.bytes);
+    tinygltf::Value::Object entry;
+    entry["uri"] = tinygltf::Value(name);
+    entry["mimeType"] = tinygltf::Value(std::string("image/ktx2"));
+    entry["byteLength"] = tinygltf::Value(int(k.bytes.size()));
+    entry["source"] = tinygltf::Value(fingerprint_text(k.source));
+    tinygltf::Value::Object extras;
+    if (m.images[i].extras.IsObject()) extras = m.images[i].extras.Get<tinygltf::Value::Object>();
+    extras[kKtx2Key] = tinygltf::Value(std::move(entry));
+    m.images[i].extras = tinygltf::Value(std::move(extras));
+  }
 }
 
 std::string serialize(tinygltf::Model& m, bool binary) {
@@ -254,6 +326,16 @@ void save_glb(const GltfFile& file, const std::string& path) {
     m.buffers.push_back(std::move(merged));
   }
   AtomicWriter writer;
+  std::set<std::string> used;
+  write_ktx2_sidecars(file, m, fs::path(path).parent_path(), fs::path(path).stem().string(), writer,
+                      [&](std::string name) {
+                        name = safe_name(name);
+                        std::string candidate = name;
+                        for (int k = 1; used.count(candidate); ++k)
+                          candidate = fs::path(name).stem().string() + "_" + std::to_string(k) + ".ktx2";
+                        used.insert(candidate);
+                        return candidate;
+                      });
   writer.add(path, serialize(m, true));
   writer.commit();
 }
@@ -287,6 +369,8 @@ void save_text_gltf(const GltfFile& file, const std::string& path) {
     image.bufferView = -1;
     image.mimeType.clear();
   }
+
+  write_ktx2_sidecars(file, m, dir, stem, writer, unique);
 
   // Buffers: one .bin each. tinygltf would inline them as base64; serialize without the
   // bytes and patch uri and byteLength afterwards.

@@ -169,36 +169,40 @@ TEST_CASE("pack: footprints interlock where bounding boxes cannot", "[atlas]") {
   CHECK(gutters_hold(label, 48, 56, 2));
 }
 
-TEST_CASE("pack: block alignment for BCn", "[atlas]") {
+TEST_CASE("pack: block alignment for BCn (4) and ASTC 5x5, 6x6, 8x8", "[atlas]") {
   const auto charts = random_charts(30, 11);
-  PackOptions opt;
-  opt.gutter = 3;
-  opt.block = 4;
-  Packing p = atlas::pack_max_scale(charts, 256, 256, opt, 1.0);
-  REQUIRE(p.ok);
-  std::vector<int> label;
-  CHECK(label_atlas(charts, p, label));
-  CHECK(gutters_hold(label, 256, 256, 3));
-  for (const auto& pl : p.placements) {
-    CHECK(pl.x % 4 == 0);
-    CHECK(pl.y % 4 == 0);
-    CHECK(pl.width % 4 == 0);
-    CHECK(pl.height % 4 == 0);
-  }
-  // No 4x4 block holds texels of two charts, and charts keep a whole block apart.
-  int shared = 0;
-  for (int by = 0; by < 64; ++by)
-    for (int bx = 0; bx < 64; ++bx) {
-      int seen = 0;
-      for (int y = 0; y < 4; ++y)
-        for (int x = 0; x < 4; ++x) {
-          const int l = label[size_t(4 * by + y) * 256 + 4 * bx + x];
-          if (l && seen && l != seen) ++shared;
-          if (l) seen = l;
-        }
+  for (const uint32_t b : {4u, 5u, 6u, 8u}) {
+    INFO("block " << b);
+    const uint32_t side = 48 * b;  // whole blocks
+    PackOptions opt;
+    opt.gutter = 3;
+    opt.block = b;
+    Packing p = atlas::pack_max_scale(charts, side, side, opt, 1.0);
+    REQUIRE(p.ok);
+    std::vector<int> label;
+    CHECK(label_atlas(charts, p, label));
+    CHECK(gutters_hold(label, side, side, 3));
+    for (const auto& pl : p.placements) {
+      CHECK(pl.x % b == 0);
+      CHECK(pl.y % b == 0);
+      CHECK(pl.width % b == 0);
+      CHECK(pl.height % b == 0);
     }
-  CHECK(shared == 0);
-  CHECK(gutters_hold(label, 256, 256, 4));  // the gutter rounds up to one block
+    // No b x b block holds texels of two charts, and charts keep a whole block apart.
+    int shared = 0;
+    for (uint32_t by = 0; by < side / b; ++by)
+      for (uint32_t bx = 0; bx < side / b; ++bx) {
+        int seen = 0;
+        for (uint32_t y = 0; y < b; ++y)
+          for (uint32_t x = 0; x < b; ++x) {
+            const int l = label[size_t(b * by + y) * side + b * bx + x];
+            if (l && seen && l != seen) ++shared;
+            if (l) seen = l;
+          }
+      }
+    CHECK(shared == 0);
+    CHECK(gutters_hold(label, side, side, int(b)));  // the gutter rounds up to one block
+  }
 }
 
 TEST_CASE("pack: the bisection scale is maximal", "[atlas]") {
@@ -262,13 +266,15 @@ TEST_CASE("pack: atlas size from the budget", "[atlas]") {
   CHECK(ci.texel_ratio == Approx(0.5).epsilon(0.01));
   CHECK(ci.packing.scale < 1.0);
 
-  o.pack.block = 4;
   o.measure = atlas::CostMeasure::ChartTexels;
   o.cost = 0.3;
-  auto cb = atlas::choose_atlas(charts, 1024, 512, old_used, o);
-  REQUIRE(cb.packing.ok);
-  CHECK(cb.packing.width % 4 == 0);
-  CHECK(cb.packing.height % 4 == 0);
+  for (const uint32_t b : {4u, 6u}) {
+    o.pack.block = b;
+    auto cb = atlas::choose_atlas(charts, 1024, 512, old_used, o);
+    REQUIRE(cb.packing.ok);
+    CHECK(cb.packing.width % b == 0);
+    CHECK(cb.packing.height % b == 0);
+  }
 }
 
 TEST_CASE("pack: holes inside and between charts are refilled", "[atlas]") {

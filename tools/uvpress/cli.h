@@ -3,6 +3,8 @@
 #pragma once
 
 #include "engine.h"
+#include "io/astc_codec.h"
+#include "io/gltf_io.h"
 #include "io/references.h"
 
 #include <CLI/CLI.hpp>
@@ -54,6 +56,20 @@ CLI::Validator cost_grid_value();
 // trilinear|bilinear (prefix "--" for eval and the benches, "--eval-" for batch's eval,
 // "--score-" for the views reparam scores its candidates and guard with).
 void add_view_options(CLI::App* cmd, uint32_t& resolution, eval::TextureFilter& filter, const std::string& prefix);
+
+// GPU-ready copies of the written textures (gpu_output.cpp): --texture-format source|astc,
+// --astc-block WxH, --astc-quality Q.
+struct GpuOutputArgs {
+  std::string format = "source";
+  io::AstcOptions astc;
+  bool block_given = false;  // --astc-block was given
+};
+void add_gpu_output_options(CLI::App* cmd, GpuOutputArgs& args);
+// With --texture-format astc: every image of `file` encoded as an ASTC KTX2 copy (written
+// beside the output by save_gltf); the report's `gpu_textures` [{image, name, format,
+// vk_format, quality, size, levels, bytes, rmse_8bit, psnr_db, seconds}] and, in
+// `summary`, the summary line's words. Otherwise null, and nothing changes.
+nlohmann::ordered_json attach_gpu_textures(io::GltfFile& file, const GpuOutputArgs& args, std::string* summary);
 
 // "1.2 MB"-style size for summary lines.
 std::string human_bytes(uint64_t bytes);

@@ -18,8 +18,10 @@ void add_copy(CLI::App& app, Globals& g) {
   auto input = std::make_shared<std::string>(), output = std::make_shared<std::string>();
   cmd->add_option("input", *input, "glTF asset (.gltf or .glb)")->required();
   cmd->add_option("-o,--output", *output, "Output file (.gltf or .glb)")->required();
-  cmd->callback([&g, input, output] {
-    g.action = [&g, input, output] {
+  auto gpu = std::make_shared<GpuOutputArgs>();
+  add_gpu_output_options(cmd, *gpu);
+  cmd->callback([&g, input, output, gpu] {
+    g.action = [&g, input, output, gpu] {
       auto t0 = std::chrono::steady_clock::now();
       if (!io::is_gltf_output_path(*output))
         throw InputError(*output, "unsupported output format (use .gltf or .glb)");
@@ -27,17 +29,21 @@ void add_copy(CLI::App& app, Globals& g) {
       io::GltfFile file = io::load_gltf(*input, g.refs());
       io::build_asset(file);  // reject what later stages could not read
       g.stage("load", t0);
+      std::string gpu_summary;
+      const auto gpu_textures = attach_gpu_textures(file, *gpu, &gpu_summary);
       io::save_gltf(file, *output);
       g.stage("save", t0);
       // The whole asset (JSON, buffers, images) before and after; images are carried byte
       // for byte, so their costs are the same on both sides.
       const uint64_t in = io::asset_bytes(*input, g.refs()).total(), out = io::asset_bytes(*output).total();
       const auto costs = pipeline::image_costs(file);
-      std::printf("%s (%s) -> %s (%s), textures %s, VRAM (BC7, mips) %s\n", input->c_str(), human_bytes(in).c_str(),
+      std::printf("%s (%s) -> %s (%s), textures %s, VRAM (BC7, mips) %s%s\n", input->c_str(), human_bytes(in).c_str(),
                   output->c_str(), human_bytes(out).c_str(), human_bytes(costs["totals"]["bytes"].get<uint64_t>()).c_str(),
-                  human_bytes(costs["totals"]["vram_bc7_mips"].get<uint64_t>()).c_str());
-      g.write_report({{"input", *input}, {"output", *output}, {"input_bytes", in}, {"output_bytes", out},
-                      {"textures", costs["textures"]}, {"texture_totals", costs["totals"]}});
+                  human_bytes(costs["totals"]["vram_bc7_mips"].get<uint64_t>()).c_str(), gpu_summary.c_str());
+      nlohmann::ordered_json report = {{"input", *input}, {"output", *output}, {"input_bytes", in}, {"output_bytes", out},
+                                       {"textures", costs["textures"]}, {"texture_totals", costs["totals"]}};
+      if (!gpu_textures.is_null()) report["gpu_textures"] = gpu_textures;
+      g.write_report(report);
       return 0;
     };
   });

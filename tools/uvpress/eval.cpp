@@ -65,6 +65,8 @@ void add_eval(CLI::App& app, Globals& g) {
     eval::EvalOptions view;  // resolution and filter
     double contact = 0;
     std::string html;
+    std::optional<io::AstcOptions> codec;
+    std::optional<io::AstcQuality> codec_quality;
   };
   auto a = std::make_shared<Args>();
   cmd->add_option("reference", a->reference, "The input asset (.gltf/.glb): its layout and full texture are the reference")
@@ -80,6 +82,28 @@ void add_eval(CLI::App& app, Globals& g) {
   add_view_options(cmd, a->view.resolution, a->view.filter, "--");
   cmd->add_option("--contact-cost", a->contact, "c_r of the contact sheet (default: the grid point nearest 0.25)");
   cmd->add_option("--html", a->html, "Write an offline HTML report into this folder");
+  cmd->add_option_function<std::string>(
+         "--codec",
+         [a](const std::string& v) {
+           if (v == "none") {
+             a->codec.reset();
+             return;
+           }
+           const auto b = v.rfind("astc-", 0) == 0 ? io::parse_astc_block(v.substr(5)) : std::nullopt;
+           if (!b) throw CLI::ValidationError("--codec", "must be none or astc-WxH (4x4 5x4 5x5 6x5 6x6 8x5 8x6 8x8)");
+           a->codec = io::AstcOptions{(*b)[0], (*b)[1], io::AstcQuality::Medium};
+         },
+         "Score the textures after this GPU codec (each mip level compressed and decoded by astcenc): q at equal "
+         "compressed bytes (default none)")
+      ->type_name("none|astc-WxH");
+  cmd->add_option_function<std::string>(
+         "--codec-quality",
+         [a](const std::string& v) {
+           a->codec_quality = io::parse_astc_quality(v);
+           if (!a->codec_quality) throw CLI::ValidationError("--codec-quality", "must be fastest, fast, medium, thorough or exhaustive");
+         },
+         "astcenc's preset for --codec (default medium, as reparam --texture-format astc)")
+      ->type_name("fastest|fast|medium|thorough|exhaustive");
   cmd->callback([&g, a] {
     g.action = [&g, a] {
       auto t0 = std::chrono::steady_clock::now();
@@ -105,6 +129,8 @@ void add_eval(CLI::App& app, Globals& g) {
       o.paper_baseline = a->paper_baseline;
       o.contact_cost = a->contact;
       o.artifacts = !a->html.empty();
+      o.codec = a->codec;
+      if (o.codec && a->codec_quality) o.codec->quality = *a->codec_quality;
       const bool tty = isatty(2);
       eval::EvalArtifacts art;
       auto report = eval::evaluate(ref, others, *engine, o, &art, [&](const std::string& stage, size_t done, size_t total) {
@@ -130,10 +156,11 @@ void add_eval(CLI::App& app, Globals& g) {
                         s["vs"].get<std::string>().c_str(), 100 * s["pixel_ratio_at_equal_q"].get<double>());
           summary += buf;
         }
-      std::printf("eval: %zu layouts x %zu costs (image texels; input resized %s), %d views at %u px (%s, %.0f%% of "
+      const std::string codec = o.codec ? ", after ASTC " + io::block_name(*o.codec) + " " + io::to_string(o.codec->quality) : "";
+      std::printf("eval: %zu layouts x %zu costs (image texels; input resized %s%s), %d views at %u px (%s, %.0f%% of "
                   "the surface resolved), noise floor q %.2g, in %.1f s%s\n",
                   report["layouts"].size(), o.cost_grid.size(), report["input_resize"].get<std::string>().c_str(),
-                  report["views"].get<int>(), report["resolution"].get<unsigned>(),
+                  codec.c_str(), report["views"].get<int>(), report["resolution"].get<unsigned>(),
                   report["texture_filter"].get<std::string>().c_str(), 100 * report["resolved_fraction"].get<double>(),
                   report["noise_floor"].is_null() ? 0.0 : report["noise_floor"].get<double>(),
                   report["seconds"]["total"].get<double>(), summary.c_str());

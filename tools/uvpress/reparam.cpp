@@ -75,7 +75,9 @@ void add_reparam(CLI::App& app, Globals& g) {
   add_view_options(cmd, o->score_resolution, o->score_filter, "--score-");
   cmd->add_flag("--keep-aspect", o->keep_aspect, "New textures keep the source's aspect ratio (default: 2:1 or 1:2 of it where that packs the charts larger)");
   cmd->add_option("--gutter", o->gutter, "Texels between charts, half of it at image edges a sampler repeats across (default: mip-safe for the new image's size: every mip level clean down to the first of side <= 64 texels, at most 16: 8 texels at 362^2, 16 from 1024^2)")->check(CLI::Range(0u, 64u));
-  cmd->add_option("--block-align", o->block, "Align charts to N x N blocks (4 for BCn)")->capture_default_str()->check(CLI::IsMember({1u, 4u}));
+  auto* block_align = cmd->add_option("--block-align", o->block, "Align charts to N x N blocks (4 for BCn and ASTC 4x4, 5, 6, 8 for ASTC 5x5, 6x6, 8x8; default: 1, or the --astc-block when square)")->capture_default_str()->check(CLI::IsMember({1u, 4u, 5u, 6u, 8u}));
+  auto gpu = std::make_shared<GpuOutputArgs>();
+  add_gpu_output_options(cmd, *gpu);
   cmd->add_option("--epsilon", o->triangle.epsilon, "One GMSD bound for every triangle view (eq. 12; default: per triangle, from the loss a resize to the cost would cause)")
       ->check(CLI::Range(1e-4, 0.5))
       ->each([o](const std::string&) { o->rate_control = false; });
@@ -94,8 +96,12 @@ void add_reparam(CLI::App& app, Globals& g) {
                 "Build only the paper's layout (no floored-stretch or repacked candidates to choose from)");
   cmd->add_flag("--force-reparam", [o](int64_t) { o->guard = false; },
                 "Write reparam's layout even when a plain resize to the same texels looks better");
-  cmd->callback([&g, input, output, o, no_optimize] {
-    g.action = [&g, input, output, o, no_optimize] {
+  cmd->callback([&g, input, output, o, no_optimize, gpu, block_align] {
+    // ASTC blocks other than 4x4 need charts aligned to the block: square footprints set
+    // --block-align unless it was given.
+    if (gpu->format == "astc" && block_align->count() == 0 && gpu->astc.block_x == gpu->astc.block_y)
+      o->block = gpu->astc.block_x;
+    g.action = [&g, input, output, o, no_optimize, gpu] {
       auto t0 = std::chrono::steady_clock::now();
       if (!io::is_gltf_output_path(*output)) throw InputError(*output, "unsupported output format (use .gltf or .glb)");
       g.prepare_outputs({*output});  // before the work, not after it
@@ -106,6 +112,9 @@ void add_reparam(CLI::App& app, Globals& g) {
       ProgressLine progress(g.verbose);
       auto report = pipeline::reparam(file, *engine, options, std::ref(progress));
       progress.finish();
+      std::string gpu_summary;
+      const auto gpu_textures = attach_gpu_textures(file, *gpu, &gpu_summary);
+      if (!gpu_textures.is_null()) report["gpu_textures"] = gpu_textures;
       io::save_gltf(file, *output);
       double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       // The whole asset before and after: JSON, buffers and images (or the .glb).
@@ -152,9 +161,9 @@ void add_reparam(CLI::App& app, Globals& g) {
                    human_bytes(tt["old"]["vram_bc7_mips"].get<uint64_t>()) + " -> " +
                    human_bytes(tt["new"]["vram_bc7_mips"].get<uint64_t>());
       }
-      std::printf("%s (%s, %llu texels) -> %s (%s, %llu texels)%s, cost ratio %.3f%s%s%s, %.1f s\n", input->c_str(),
+      std::printf("%s (%s, %llu texels) -> %s (%s, %llu texels)%s%s, cost ratio %.3f%s%s%s, %.1f s\n", input->c_str(),
                   human_bytes(in_bytes).c_str(), (unsigned long long)old_t, output->c_str(), human_bytes(out_bytes).c_str(),
-                  (unsigned long long)new_t, textures.c_str(), report["cost_ratio"].get<double>(), capped.c_str(),
+                  (unsigned long long)new_t, textures.c_str(), gpu_summary.c_str(), report["cost_ratio"].get<double>(), capped.c_str(),
                   infeasible.c_str(), verdict.c_str(), seconds);
       if (g.verbose)
         for (auto& [stage, s] : report["stages"].items()) std::fprintf(stderr, "%s: %.2f s\n", stage.c_str(), s.get<double>());
