@@ -964,6 +964,7 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
   auto consider = [&](const Candidate& c) {
     io::GltfFile f = original;
     Realized r = realize(asset, layouts, prepared, layout_base, f, engine, o, c, progress, warnings);
+    if (scorer && r.overlaps_new == 0) r.q = score(f).q;
     candidates.push_back({{"name", r.name},
                           {"cost_ratio", r.old_texels > 0 ? r.new_texels / r.old_texels : 1.0},
                           {"q", r.q >= 0 ? json(r.q) : json(nullptr)},
@@ -1027,7 +1028,8 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
     t_score += t0.seconds();  // the resize; score() counts itself
     const double q_resize = score(resized).q;
     guard = {{"q_reparam", chosen.q}, {"q_resize", q_resize}, {"resize", "lanczos3-srgb"}};
-    if (!(chosen.q < q_resize)) {
+    // A layout that was not scored (q < 0) never wins against one that was.
+    if (!(chosen.q >= 0 && chosen.q < q_resize)) {
       chosen_by = "resize";
       file = std::move(resized);
       for (auto& t : chosen.textures) t["new_bytes"] = file.image_bytes[size_t(t["image"].get<int>())].size();
