@@ -347,7 +347,16 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
         const perceptual::TriangleResult& r = P.results[ch.uv_set][t];
         if (!slope_scale.empty()) {
           const double k = slope_scale[ch.uv_set][t];
-          targets.push_back({{1, 0, 0, 1}, {k, 0, 0, k}, r.weight_rotation, r.weight_stretch});
+          if (cand.floor > 0) {
+            // The triangle stage's stretch shape (floored, unrotated) at the allocation's area.
+            perceptual::TriangleTarget shaped = target_of(r, cand.floor, false);
+            const double det = shaped.stretch[0] * shaped.stretch[3] - shaped.stretch[1] * shaped.stretch[2];
+            const double f = det > 0 ? k / std::sqrt(det) : k;
+            for (double& v : shaped.stretch) v *= f;
+            targets.push_back(shaped);
+          } else {
+            targets.push_back({{1, 0, 0, 1}, {k, 0, 0, k}, r.weight_rotation, r.weight_stretch});
+          }
         } else {
           targets.push_back(target_of(r, cand.floor, cand.rotate));
         }
@@ -923,6 +932,7 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
     if (equal_slope) {
       plans.push_back({"equal-slope", true, 0.0, Candidate::Bake::Lanczos, false, true, false, true});
       plans.push_back({"equal-slope-outline", true, 0.0, Candidate::Bake::Lanczos, false, true, true, true});
+      plans.push_back({"equal-slope-shaped", true, 0.5, Candidate::Bake::Lanczos, false, true, false, true});
     }
   }
   if (!reshape || (o.max_gmsd <= 0 && o.candidates)) plans.push_back({"repack", false, 1.0});
