@@ -1,6 +1,7 @@
 #include <catch2/catch.hpp>
 
 #include "atlas/rebake.h"
+#include "atlas/dark_chart_on_white.h"
 #include "atlas/rebake_lanczos.h"
 #include "eval/resize.h"
 
@@ -95,16 +96,9 @@ TEST_CASE("rebake_lanczos: surround bakes what the source has around a chart int
   // A dark chart (the square [16, 48)^2 of a 64^2 source) on a white background, moved to
   // the middle of a 64^2 atlas at the same density. Next to its edge the gutter must show
   // the source's white up to `surround` texels, then the fill (the chart's own dark mean).
-  Image src;
-  src.width = src.height = 64, src.channels = 3;
-  src.pixels.assign(64 * 64 * 3, 1.0f);
-  for (uint32_t y = 16; y < 48; ++y)
-    for (uint32_t x = 16; x < 48; ++x)
-      for (uint32_t c = 0; c < 3; ++c) src.at(x, y, c) = 0.1f;
-  const std::vector<uint32_t> idx{0, 1, 2, 0, 2, 3};
-  const std::vector<float> old_uv{0.25f, 0.25f, 0.75f, 0.25f, 0.75f, 0.75f, 0.25f, 0.75f};
-  const std::vector<float> new_uv{0.25f + 3 / 64.f, 0.25f, 0.75f + 3 / 64.f, 0.25f, 0.75f + 3 / 64.f, 0.75f, 0.25f + 3 / 64.f, 0.75f};
-  const atlas::RebakeMesh mesh{idx.data(), idx.size(), old_uv.data(), new_uv.data(), 4};
+  const test::DarkChartOnWhite chart;
+  const Image& src = chart.source;
+  const atlas::RebakeMesh mesh = chart.mesh();
   atlas::RebakeOptions o;
   o.width = o.height = 64;
   o.role = atlas::RebakeRole::Data;

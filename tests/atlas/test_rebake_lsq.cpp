@@ -5,6 +5,7 @@
 #include <catch2/catch.hpp>
 
 #include "atlas/rebake.h"
+#include "atlas/dark_chart_on_white.h"
 #include "atlas/rebake_lanczos.h"
 #include "atlas/rebake_lsq.h"
 #include "core/image.h"
@@ -235,16 +236,9 @@ TEST_CASE("rebake_lsq: a Lanczos start's surround survives the solve where `keep
   // gutter past it is refilled from the solved texels, which near the image origin's 4x4
   // blocks mixes in the chart's dark at x 15 (0.63). With `keep` every surround texel keeps
   // the Lanczos start's white.
-  Image src;
-  src.width = src.height = 64, src.channels = 3;
-  src.pixels.assign(64 * 64 * 3, 1.0f);
-  for (uint32_t y = 16; y < 48; ++y)
-    for (uint32_t x = 16; x < 48; ++x)
-      for (uint32_t c = 0; c < 3; ++c) src.at(x, y, c) = 0.1f;
-  const std::vector<uint32_t> idx{0, 1, 2, 0, 2, 3};
-  const std::vector<float> old_uv{0.25f, 0.25f, 0.75f, 0.25f, 0.75f, 0.75f, 0.25f, 0.75f};
-  const std::vector<float> new_uv{0.25f + 3 / 64.f, 0.25f, 0.75f + 3 / 64.f, 0.25f, 0.75f + 3 / 64.f, 0.75f, 0.25f + 3 / 64.f, 0.75f};
-  const RebakeMesh mesh{idx.data(), idx.size(), old_uv.data(), new_uv.data(), 4};
+  const test::DarkChartOnWhite chart;
+  const Image& src = chart.source;
+  const atlas::RebakeMesh mesh = chart.mesh();
   RebakeOptions o;
   o.width = o.height = 64;
   o.role = RebakeRole::Data;
