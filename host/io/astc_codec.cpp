@@ -79,6 +79,27 @@ uint64_t astc_bytes(uint32_t w, uint32_t h, uint32_t bx, uint32_t by) {
   return uint64_t((w + bx - 1) / bx) * ((h + by - 1) / by) * 16;
 }
 
+namespace {
+
+// Runs `work(t)` for t in [0, threads) on as many OpenMP threads (astcenc splits the blocks
+// among the thread indices of one context; small images take one: the others would find no
+// work). Returns the last error any of them reported, or success.
+template <class Work>
+astcenc_error on_threads(unsigned threads, const Work& work) {
+  astcenc_error error = ASTCENC_SUCCESS;
+#pragma omp parallel for num_threads(threads) schedule(static, 1)
+  for (int t = 0; t < int(threads); ++t) {
+    const astcenc_error e = work(unsigned(t));
+    if (e != ASTCENC_SUCCESS) {
+#pragma omp critical
+      error = e;
+    }
+  }
+  return error;
+}
+
+}  // namespace
+
 AstcCodec::AstcCodec(bool srgb, const AstcOptions& o) : options_(o) {
   if (!find_footprint(o.block_x, o.block_y))
     throw std::invalid_argument("ASTC block " + block_name(o) + " is not one of 4x4 5x4 5x5 6x5 6x6 8x5 8x6 8x8");
@@ -115,17 +136,9 @@ std::vector<uint8_t> AstcCodec::compress(const Image& image) {
   astcenc_image img{image.width, image.height, 1, ASTCENC_TYPE_U8, slices};
   const astcenc_swizzle swz{ASTCENC_SWZ_R, ASTCENC_SWZ_G, ASTCENC_SWZ_B, ASTCENC_SWZ_A};
   std::vector<uint8_t> out(astc_bytes(image.width, image.height, options_.block_x, options_.block_y));
-  // Small images (coarse mip levels) on one thread: the others would find no work.
-  const unsigned threads = n < 64 * 64 ? 1 : threads_;
-  astcenc_error error = ASTCENC_SUCCESS;
-#pragma omp parallel for num_threads(threads) schedule(static, 1)
-  for (int t = 0; t < int(threads); ++t) {
-    const astcenc_error e = astcenc_compress_image(context_, &img, &swz, out.data(), out.size(), unsigned(t));
-    if (e != ASTCENC_SUCCESS) {
-#pragma omp critical
-      error = e;
-    }
-  }
+  const astcenc_error error = on_threads(n < 64 * 64 ? 1 : threads_, [&](unsigned t) {
+    return astcenc_compress_image(context_, &img, &swz, out.data(), out.size(), t);
+  });
   astcenc_compress_reset(context_);
   check(error, "compress");
   return out;
@@ -140,16 +153,9 @@ Image AstcCodec::decompress(const uint8_t* data, size_t size, uint32_t w, uint32
   void* slices[1] = {rgba.data()};
   astcenc_image img{w, h, 1, ASTCENC_TYPE_U8, slices};
   const astcenc_swizzle swz{ASTCENC_SWZ_R, ASTCENC_SWZ_G, ASTCENC_SWZ_B, ASTCENC_SWZ_A};
-  const unsigned threads = n < 64 * 64 ? 1 : threads_;
-  astcenc_error error = ASTCENC_SUCCESS;
-#pragma omp parallel for num_threads(threads) schedule(static, 1)
-  for (int t = 0; t < int(threads); ++t) {
-    const astcenc_error e = astcenc_decompress_image(context_, data, size, &img, &swz, unsigned(t));
-    if (e != ASTCENC_SUCCESS) {
-#pragma omp critical
-      error = e;
-    }
-  }
+  const astcenc_error error = on_threads(n < 64 * 64 ? 1 : threads_, [&](unsigned t) {
+    return astcenc_decompress_image(context_, data, size, &img, &swz, t);
+  });
   astcenc_decompress_reset(context_);
   check(error, "decompress");
   Image out;
