@@ -158,15 +158,10 @@ struct Prepared {
   std::vector<std::vector<uint32_t>> welded_of_vertex;  // per UV set: primitive vertex -> welded UV id
   std::vector<size_t> welded_count;
   std::vector<std::vector<perceptual::TriangleResult>> results;  // per UV set (empty without optimize)
-  // The equal-slope allocation's input (perceptual/rate_allocation.h): each optimized
-  // triangle's loss at a few uniform shrinks, its area and screen weight, at the requested
-  // cost (0: not measured).
-  struct RateCurves {
-    perceptual::LossCurves curves;
-    std::vector<double> area, weight;
-    std::vector<std::pair<size_t, uint32_t>> where;  // (UV set, triangle) per entry
-    double cost = 0;
-  } rate;
+  // The equal-slope allocation at the requested cost (perceptual/rate_allocation.h): per UV
+  // set and triangle its isotropic scale (empty: not computed), and its figures.
+  std::vector<std::vector<double>> equal_slope;
+  json equal_slope_report;
   double old_used = 0;  // eq. 20: source texels under the input's charts
   size_t rigid = 0;
   TriangleCounts tri;
@@ -239,7 +234,7 @@ struct Candidate {
   bool rotate = true;          // follow the triangle stage's rotations (false: R-bar = I, stretches only)
   bool exact = true;           // unreshaped charts keep their texels (atlas/place_texels.h), else resampled
   bool outline = false;        // reshaped charts keep their input outline (perceptual/outline_fit.h)
-  // Targets J = s I from the equal-slope allocation (Prepared::rate) instead of the
+  // Targets J = s I from the equal-slope allocation (Prepared::equal_slope) instead of the
   // triangle stage's Jacobians (its weights are kept).
   bool equal_slope = false;
 };
@@ -304,19 +299,8 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
     const double W = P.W, H = P.H;
     json& jl = out.layouts[li];
     size_t layout_flips = 0, mesh_failed = 0, overlap_fallback_pairs = 0, outline_kept = 0, outline_failed = 0;
-    // Equal-slope targets: the allocation at this candidate's budget.
-    std::vector<std::vector<double>> slope_scale;
-    if (cand.equal_slope && P.rate.cost > 0) {
-      const perceptual::RateAllocation alloc =
-          perceptual::allocate_by_equal_slope(P.rate.curves, P.rate.area, P.rate.weight, P.rate.cost);
-      slope_scale.resize(L.uv_sets.size());
-      for (size_t si = 0; si < L.uv_sets.size(); ++si) slope_scale[si].assign(P.results[si].size(), 1.0);
-      for (size_t k = 0; k < P.rate.where.size(); ++k) slope_scale[P.rate.where[k].first][P.rate.where[k].second] = alloc.scale[k];
-      jl["equal_slope"] = {{"cost", P.rate.cost},  // share of the source's texels under the triangles
-                           {"spent", alloc.spent},
-                           {"multiplier", alloc.multiplier},
-                           {"scale_quartiles", {quantile(alloc.scale, 0.25), quantile(alloc.scale, 0.5), quantile(alloc.scale, 0.75)}}};
-    }
+    const bool slope = cand.equal_slope && !P.equal_slope.empty();
+    if (slope) jl["equal_slope"] = P.equal_slope_report;
     double outline_blend = 0;
 
     // Mesh stage per chart. Weights floored relative to the whole layout's mean (not only
@@ -345,8 +329,8 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
       targets.reserve(ch.triangles.size());
       for (uint32_t t : ch.triangles) {
         const perceptual::TriangleResult& r = P.results[ch.uv_set][t];
-        if (!slope_scale.empty()) {
-          const double k = slope_scale[ch.uv_set][t];
+        if (slope) {
+          const double k = P.equal_slope[ch.uv_set][t];
           if (cand.floor > 0) {
             // The triangle stage's stretch shape (floored, unrotated) at the allocation's area.
             perceptual::TriangleTarget shaped = target_of(r, cand.floor, false);
@@ -895,9 +879,15 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
             curves.loss.push_back(curves.scales[j] < 1 ? g[j][k] : r.identity_gmsd);
         }
       }
-      P.rate.curves = std::move(curves), P.rate.area = std::move(area), P.rate.weight = std::move(weight);
-      P.rate.where = std::move(where);
-      P.rate.cost = rate_scale * rate_scale;
+      const double cost = rate_scale * rate_scale;
+      const perceptual::RateAllocation alloc = perceptual::allocate_by_equal_slope(curves, area, weight, cost);
+      P.equal_slope.resize(L.uv_sets.size());
+      for (size_t si = 0; si < L.uv_sets.size(); ++si) P.equal_slope[si].assign(P.results[si].size(), 1.0);
+      for (size_t k = 0; k < where.size(); ++k) P.equal_slope[where[k].first][where[k].second] = alloc.scale[k];
+      P.equal_slope_report = {{"cost", cost},  // share of the source's texels under the triangles
+                              {"spent", alloc.spent},
+                              {"multiplier", alloc.multiplier},
+                              {"scale_quartiles", {quantile(alloc.scale, 0.25), quantile(alloc.scale, 0.5), quantile(alloc.scale, 0.75)}}};
       t_triangle += t0.seconds();
     }
     optimized += P.tri.optimized, infeasible += P.tri.optimized - P.tri.feasible;
@@ -932,7 +922,7 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
     // 0.00164 (shaped; best other 0.00203), the truck 0.00657 (outline, least squares;
     // best other 0.00691).
     bool equal_slope = false;
-    for (const Prepared& P : prepared) equal_slope |= P.rate.cost > 0;
+    for (const Prepared& P : prepared) equal_slope |= !P.equal_slope.empty();
     if (equal_slope) {
       plans.push_back({"equal-slope", true, 0.0, Candidate::Bake::Lanczos, false, true, false, true});
       plans.push_back({"equal-slope-outline", true, 0.0, Candidate::Bake::Lanczos, false, true, true, true});
