@@ -21,7 +21,7 @@ namespace uvpress::pipeline {
 // Which algorithm wrote an output: raised by every change that changes reparam's outputs
 // for the same input and options (layouts, bakes, gutters, encoders), so that a resumed
 // batch redoes what an older algorithm wrote (batch compares it with the options).
-constexpr int kReparamRevision = 3;  // 2: image-edge gutters by sampler, surround in gutters; 3: equal-slope candidates, least squares keeps the surround
+constexpr int kReparamRevision = 4;  // 2: image-edge gutters by sampler, surround in gutters; 3: equal-slope candidates, least squares keeps the surround; 4: the wide-gutter variant
 
 struct ReparamOptions {
   double cost = 0.5;       // relative pixel cost c_r of the new textures vs the old (eq. 20-21)

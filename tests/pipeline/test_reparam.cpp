@@ -350,3 +350,40 @@ TEST_CASE("reparam on the demo asset at half the texels beats the plain resize b
   CHECK(q_written == Approx(report["guard"]["q_reparam"].get<double>()).epsilon(1e-9));
   CHECK(q_written < q_resize - floor);
 }
+
+TEST_CASE("reparam on Duck at half the texels: gutters a mip level cleaner win, and the written file beats the resize",
+          "[pipeline][reparam][shared][wide-gutter]") {
+  // Issue 17's Duck case. Duck's charts share texels and can only be repacked; at the
+  // mip-safe default (8 texels at 362^2) the repack loses to the resize (q 0.000779 vs
+  // 0.000692) although it keeps more texels (scale 0.733 vs 0.707): where its views sample
+  // coarse mip levels, the repacked charts bleed into each other, while the input's charts
+  // sit in the yellow they continue into on the mesh. With twice the gutter the repack wins.
+  // The margin (about 2.5 %) is below eval's noise floor for Duck (1.4e-4, a fifth of q):
+  // this checks the choice and the written score, not a visible win.
+  if (!test::shared_dir()) UVPRESS_SKIP("../shared is absent");
+  auto engine = engine::make_cpu_engine({});
+  const auto path = *test::shared_dir() / "assets" / "Duck" / "glTF" / "Duck.gltf";
+  const io::GltfFile in = io::load_gltf(path.string());
+  io::GltfFile out = in;
+  pipeline::ReparamOptions o;
+  o.cost = 0.5;
+  const auto report = pipeline::reparam(out, *engine, o);
+  INFO(report["candidates"].dump());
+  REQUIRE(report["guard"].is_object());
+  double q_default = -1, q_wide = -1;
+  for (const auto& c : report["candidates"]) {
+    if (c["name"] == "repack") q_default = c["q"].get<double>();
+    if (c["name"] == "repack+wide-gutter") q_wide = c["q"].get<double>();
+  }
+  REQUIRE(q_default > 0);
+  REQUIRE(q_wide > 0);
+  CHECK(q_wide < q_default);
+  CHECK(report["chosen"] == "reparam");
+  CHECK(report["layout"] == "repack+wide-gutter");
+  CHECK(report["layouts"][0]["gutter"] == 16);
+  eval::EvalOptions eo;
+  eo.artifacts = false;
+  const double q_written = eval::score_as_written(in, out, *engine, eo).q;
+  CHECK(q_written == Approx(q_wide).epsilon(1e-9));
+  CHECK(q_written < report["guard"]["q_resize"].get<double>());
+}
