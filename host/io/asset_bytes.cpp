@@ -1,5 +1,6 @@
 #include "io/asset_bytes.h"
 
+#include "core/error.h"
 #include "io/atomic_file.h"
 
 #include <set>
@@ -15,6 +16,13 @@ AssetBytes asset_bytes(const std::string& path, const RefPolicy& refs) {
     OpenRef open = open_ref(path, ref, refs);
     if (!seen.insert(open.path.string()).second) continue;
     (ref.buffer ? out.buffers : out.images) += open.file.size();
+  }
+  for (const ExternalRef& ref : ktx2_sidecar_refs(bytes)) {
+    try {
+      OpenRef open = open_ref(path, ref, refs);
+      if (seen.insert(open.path.string()).second) out.ktx2 += open.file.size();
+    } catch (const InputError&) {
+    }
   }
   return out;
 }

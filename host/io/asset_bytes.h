@@ -14,11 +14,14 @@ struct AssetBytes {
   uint64_t file = 0;     // the .gltf or .glb itself
   uint64_t buffers = 0;  // external buffer files
   uint64_t images = 0;   // external image files
+  uint64_t ktx2 = 0;     // GPU-ready KTX2 copies beside it (io/gpu_textures.h): an alternative to
+                         // the images for engines that load KTX2, not part of total()
   uint64_t total() const { return file + buffers + images; }
 };
 
 // Files are found by the loader's rule (references.h); a file named twice counts once.
-// Throws InputError as the loader would for a reference that is refused or missing.
+// Throws InputError as the loader would for a reference that is refused or missing (a KTX2
+// copy that is missing or refused counts 0: the asset is whole without it).
 AssetBytes asset_bytes(const std::string& path, const RefPolicy& refs = {});
 
 }  // namespace uvpress::io

@@ -135,4 +135,16 @@ std::vector<GpuTextureInfo> attach_astc_textures(GltfFile& file, const AstcOptio
   return out;
 }
 
+nlohmann::ordered_json gpu_textures_report(const std::vector<GpuTextureInfo>& infos, const AstcOptions& options) {
+  nlohmann::ordered_json out = nlohmann::ordered_json::array();
+  for (const GpuTextureInfo& t : infos)
+    out.push_back({{"image", t.image},       {"name", t.name},
+                   {"format", "ktx2 astc " + block_name(options) + (t.srgb ? " srgb" : " unorm")},
+                   {"vk_format", t.vk_format}, {"quality", to_string(options.quality)},
+                   {"size", {t.width, t.height}}, {"levels", t.levels},
+                   {"bytes", t.bytes},       {"rmse_8bit", t.rmse},
+                   {"psnr_db", t.psnr_db},   {"seconds", t.seconds}});
+  return out;
+}
+
 }  // namespace uvpress::io

@@ -19,6 +19,8 @@
 #include "io/astc_codec.h"
 #include "io/gltf_io.h"
 
+#include <nlohmann/json.hpp>
+
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -46,6 +48,10 @@ struct GpuTextureInfo {
 
 // Throws InputError(file.path, reason) when an image does not decode.
 std::vector<GpuTextureInfo> attach_astc_textures(GltfFile& file, const AstcOptions& options);
+
+// The reports' `gpu_textures`: [{image, name, format ("ktx2 astc 6x6 srgb"), vk_format,
+// quality, size, levels, bytes, rmse_8bit, psnr_db, seconds}], one per attached copy.
+nlohmann::ordered_json gpu_textures_report(const std::vector<GpuTextureInfo>& infos, const AstcOptions& options);
 
 // Root-mean-square error of b against a (same size and channels) in 8-bit units, and the
 // PSNR in dB it gives (99 for identical images).

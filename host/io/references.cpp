@@ -84,6 +84,23 @@ std::vector<ExternalRef> external_refs(const std::vector<uint8_t>& asset_bytes) 
   return refs;
 }
 
+std::vector<ExternalRef> ktx2_sidecar_refs(const std::vector<uint8_t>& asset_bytes) {
+  std::vector<ExternalRef> refs;
+  const nlohmann::json j = nlohmann::json::parse(json_text(asset_bytes), nullptr, /*allow_exceptions=*/false);
+  if (!j.is_object()) return refs;
+  auto images = j.find("images");
+  if (images == j.end() || !images->is_array()) return refs;
+  for (size_t i = 0; i < images->size(); ++i) {
+    const auto& e = (*images)[i];
+    if (!e.is_object() || !e.contains("extras") || !e["extras"].is_object()) continue;
+    const auto& extras = e["extras"];
+    auto k = extras.find("uvpress_ktx2");
+    if (k == extras.end() || !k->is_object() || !k->contains("uri") || !(*k)["uri"].is_string()) continue;
+    refs.push_back({"image " + std::to_string(i) + " KTX2", (*k)["uri"].get<std::string>(), false, -1});
+  }
+  return refs;
+}
+
 RegularFile::RegularFile(const fs::path& path, const std::string& label) : label_(label) {
   struct stat st;
   // stat before open: opening a FIFO blocks until a writer comes, opening a device can act.

@@ -40,6 +40,11 @@ struct ExternalRef {
 // bytes do not parse: the loader says why.
 std::vector<ExternalRef> external_refs(const std::vector<uint8_t>& asset_bytes);
 
+// The KTX2 copies its images name in extras.uvpress_ktx2 (io/gltf_io.h, `--texture-format
+// astc`), as "image N KTX2" references: optional files (the asset is whole without them)
+// that are read, hashed and counted by the same rule. Empty when the bytes do not parse.
+std::vector<ExternalRef> ktx2_sidecar_refs(const std::vector<uint8_t>& asset_bytes);
+
 // A regular file opened for reading, its size known before anything is read: callers check
 // size() against their limit first. Opening never blocks: FIFOs, devices, sockets and
 // folders are refused before they are opened (and again on what was opened).

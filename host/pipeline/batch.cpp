@@ -5,6 +5,7 @@
 #include "io/asset_bytes.h"
 #include "io/atomic_file.h"
 #include "io/gltf_io.h"
+#include "io/gpu_textures.h"
 
 #include <omp.h>
 
@@ -51,12 +52,15 @@ uint64_t fnv1a(uint64_t h, const void* data, size_t n) {
   return h;
 }
 
-// The files that make up an output asset: the main file and, for .gltf, its sidecars.
+// The files that make up an output asset: the main file, for .gltf its sidecars, and the
+// KTX2 copies either names.
 std::vector<fs::path> asset_files(const fs::path& path) {
   std::vector<fs::path> files = {path};
-  if (io::extension_of(path.string()) != ".gltf") return files;  // uvpress's .glb outputs hold everything
   try {
-    for (const auto& ref : io::external_refs(io::read_file(path.string()))) files.push_back(path.parent_path() / ref.uri);
+    const std::vector<uint8_t> bytes = io::read_file(path.string());
+    if (io::extension_of(path.string()) == ".gltf")  // uvpress's .glb outputs hold the rest
+      for (const auto& ref : io::external_refs(bytes)) files.push_back(path.parent_path() / ref.uri);
+    for (const auto& ref : io::ktx2_sidecar_refs(bytes)) files.push_back(path.parent_path() / ref.uri);
   } catch (const InputError&) {
   }
   return files;
@@ -202,13 +206,16 @@ std::string hash_asset(const std::string& path, const io::RefPolicy& refs) {
     return "";
   }
   uint64_t h = fnv1a(0xcbf29ce484222325ull, bytes.data(), bytes.size());
-  for (const auto& ref : io::external_refs(bytes)) {
+  std::vector<io::ExternalRef> refs_and_copies = io::external_refs(bytes);
+  for (auto& ref : io::ktx2_sidecar_refs(bytes)) refs_and_copies.push_back(std::move(ref));
+  for (const auto& ref : refs_and_copies) {
     h = fnv1a(h, ref.uri.data(), ref.uri.size() + 1);
     try {
       io::OpenRef open = io::open_ref(path, ref, refs);  // the loader's rule: no hang, no huge read
       open.file.read_chunks([&](const uint8_t* p, size_t n) { h = fnv1a(h, p, n); });
     } catch (const InputError& e) {
-      // The load fails with this same line; hashing it makes a fixed reference a new input.
+      // The load fails with this same line (or drops the KTX2 copy); hashing it makes a
+      // fixed reference a new input, and a removed copy a stale output.
       const std::string why = e.what();
       h = fnv1a(h, why.data(), why.size() + 1);
     }
@@ -222,7 +229,8 @@ json options_json(const BatchOptions& o) {
             {"size", r.size}, {"max_gmsd", r.max_gmsd}, {"pot", r.power_of_two}, {"keep_aspect", r.keep_aspect}, {"score_resolution", r.score_resolution}, {"score_filter", eval::to_string(r.score_filter)}, {"gutter", r.gutter == ReparamOptions::kAutoGutter ? json("auto") : json(r.gutter)}, {"block", r.block},
             {"optimize", r.optimize}, {"epsilon", r.triangle.epsilon}, {"evaluations", r.triangle.evaluations},
             {"view_size", r.triangle.view_size}, {"seed", r.triangle.seed}, {"early_stop", r.triangle.early_stop}, {"eval", o.eval},
-            {"allow_outside_refs", o.refs.allow_outside}};
+            {"allow_outside_refs", o.refs.allow_outside},
+            {"texture_format", o.astc ? json{{"astc", io::block_name(*o.astc)}, {"quality", io::to_string(o.astc->quality)}} : json("source")}};
   if (o.eval) j["eval_options"] = {{"cost_grid", o.eval_options.cost_grid}, {"resolution", o.eval_options.resolution}, {"filter", eval::to_string(o.eval_options.filter)}};
   return j;
 }
@@ -253,7 +261,19 @@ json process_asset(const BatchItem& item, const BatchOptions& o, engine::Engine*
     io::GltfFile file = io::load_gltf(item.input, o.refs);
     report["input_bytes"] = io::asset_bytes(item.input, o.refs).total();  // JSON, buffers and images
     auto r = reparam(file, *engine, o.reparam);
+    if (o.astc) r["gpu_textures"] = io::gpu_textures_report(io::attach_astc_textures(file, *o.astc), *o.astc);
+    // Files of an earlier run's output that this one no longer names (a KTX2 copy, when
+    // --texture-format changed) are removed once the new output is in place.
+    const std::vector<fs::path> earlier = fs::exists(out) ? asset_files(out) : std::vector<fs::path>();
     io::save_gltf(file, out.string());
+    {
+      const std::vector<fs::path> now = asset_files(out);
+      std::error_code ec;
+      for (const fs::path& f : earlier)
+        if (std::find(now.begin(), now.end(), f) == now.end() && f.parent_path() == out.parent_path() &&
+            f.filename().string().rfind(item.name, 0) == 0)
+          fs::remove(f, ec);
+    }
     report["output"] = out.string();
     report["output_bytes"] = io::asset_bytes(out.string()).total();
     report["output_hash"] = hash_asset(out.string());

@@ -4,7 +4,8 @@
 //   relative paths are relative to the manifest's folder. Each asset gets a name, its
 //   file stem (letters, digits, '-', '_', '.'); stems that occur more than once get
 //   "-<line number among the assets>" so that every shard computes the same names.
-// - Outputs in DIR, per asset: NAME.glb (or NAME.gltf + sidecars), NAME.eval.json with
+// - Outputs in DIR, per asset: NAME.glb (or NAME.gltf + sidecars; with --texture-format
+//   astc also NAME_<image>.ktx2 beside it), NAME.eval.json with
 //   --eval, and NAME.report.json, written last: the report is the commit marker. Every file
 //   is written atomically (temporary + rename). A failed asset gets a report with
 //   "status": "failed" and "error", and no output (a stale one from an earlier run is
@@ -24,6 +25,7 @@
 
 #include "engine.h"
 #include "eval/eval.h"
+#include "io/astc_codec.h"
 #include "io/references.h"
 #include "pipeline/reparam.h"
 
@@ -71,6 +73,9 @@ struct BatchOptions {
   bool eval = false;
   eval::EvalOptions eval_options;
   std::string format = "glb";  // glb | gltf
+  // --texture-format astc: every image also as an ASTC KTX2 copy beside NAME.glb/.gltf
+  // (io/gpu_textures.h), reported as `gpu_textures`; part of the output's hash.
+  std::optional<io::AstcOptions> astc;
   size_t shard_index = 0, shard_count = 1;
   unsigned jobs = 1;
   bool force = false;    // ignore earlier results

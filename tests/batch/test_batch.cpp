@@ -3,13 +3,17 @@
 #include <catch2/catch.hpp>
 
 #include "batch/corpus.h"
+#include "io/atomic_file.h"
 #include "io/gltf_io.h"
+#include "io/references.h"
 #include "pipeline/batch.h"
 #include "pipeline/demo_asset.h"
 #include "support.h"
 
+#include <algorithm>
 #include <chrono>
 #include <csignal>
+#include <cstring>
 #include <fcntl.h>
 #include <fstream>
 #include <map>
@@ -304,4 +308,62 @@ TEST_CASE("batch: input hashes cover a .glb's external files, read by the loader
   std::ofstream(dir / "outside.png", std::ios::app) << "x";
   CHECK(pipeline::hash_asset(outside) == refused);
   CHECK(pipeline::hash_asset(outside, {true}) != allowed);
+}
+
+TEST_CASE("batch --texture-format astc: KTX2 copies beside each output, in its hash and report; resume redoes a lost copy",
+          "[batch][cli][astc]") {
+  test::Scratch dir("batch-astc");
+  write_assets(dir.path(), 2, 6, 48);
+  write_manifest(dir / "list.txt", {"in/asset0.glb", "in/asset1.glb"});
+  const auto out = dir / "out";
+  const std::string cmd = "batch --manifest " + quoted(dir / "list.txt") + " -o " + quoted(out) + " --no-optimize --device cpu";
+
+  auto r = run_uvpress(cmd + " --texture-format astc --astc-block 4x4");
+  INFO(r.out << r.err);
+  REQUIRE(r.exit_code == 0);
+  std::vector<test::fs::path> copies;
+  for (const char* name : {"asset0", "asset1"}) {
+    const auto glb = out / (std::string(name) + ".glb");
+    const auto rep = read_json(out / (std::string(name) + ".report.json"));
+    CHECK(rep["options"]["texture_format"]["astc"] == "4x4");
+    // --block-align follows a square ASTC footprint unless given.
+    CHECK(rep["options"]["block"] == 4);
+    const auto refs = io::ktx2_sidecar_refs(io::read_file(glb.string()));
+    const auto& gpu = rep["reparam"]["gpu_textures"];
+    REQUIRE(gpu.is_array());
+    REQUIRE(gpu.size() == refs.size());
+    REQUIRE(refs.size() == io::load_gltf(glb.string()).image_bytes.size());
+    for (size_t k = 0; k < refs.size(); ++k) {
+      const auto ktx2 = out / refs[k].uri;
+      REQUIRE(test::fs::exists(ktx2));
+      CHECK(refs[k].uri.rfind(name, 0) == 0);  // named for the asset, so that names never collide
+      CHECK(gpu[k]["bytes"] == test::fs::file_size(ktx2));
+      const auto bytes = io::read_file(ktx2.string());
+      const uint8_t magic[12] = {0xAB, 'K', 'T', 'X', ' ', '2', '0', 0xBB, '\r', '\n', 0x1A, '\n'};
+      REQUIRE(bytes.size() > 16);
+      CHECK(std::equal(magic, magic + 12, bytes.begin()));
+      uint32_t vk_format = 0;
+      std::memcpy(&vk_format, bytes.data() + 12, 4);
+      CHECK(vk_format == gpu[k]["vk_format"]);
+      copies.push_back(ktx2);
+    }
+    CHECK(rep["output_hash"] == pipeline::hash_asset(glb.string()));
+    CHECK(test::validate_gltf(glb)["numErrors"] == 0);
+  }
+  REQUIRE(copies.size() >= 2);
+
+  // Up to date: skipped. A lost or changed KTX2 copy makes its asset's output stale.
+  r = run_uvpress(cmd + " --texture-format astc --astc-block 4x4");
+  CHECK_THAT(r.out, Catch::Contains("0 ok, 2 skipped"));
+  test::fs::remove(copies[0]);
+  std::ofstream(copies.back(), std::ios::binary | std::ios::app) << "x";
+  r = run_uvpress(cmd + " --texture-format astc --astc-block 4x4");
+  CHECK_THAT(r.out, Catch::Contains("2 ok, 0 skipped"));
+  CHECK(test::fs::exists(copies[0]));
+
+  // Back to the source format: the outputs are redone and the copies they no longer name removed.
+  r = run_uvpress(cmd);
+  CHECK_THAT(r.out, Catch::Contains("2 ok, 0 skipped"));
+  for (const auto& c : copies) CHECK_FALSE(test::fs::exists(c));
+  CHECK(read_json(out / "asset0.report.json")["options"]["texture_format"] == "source");
 }

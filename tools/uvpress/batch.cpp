@@ -67,6 +67,8 @@ void add_batch(CLI::App& app, Globals& g) {
     bool no_optimize = false, collect = false;
     std::vector<double> grid;
     std::optional<size_t> shard_index, shard_count;
+    GpuOutputArgs gpu;
+    CLI::Option* block_align = nullptr;
   };
   auto a = std::make_shared<Args>();
   auto& o = a->o;
@@ -86,7 +88,8 @@ void add_batch(CLI::App& app, Globals& g) {
   cmd->add_flag("--pot", o.reparam.power_of_two, "Power-of-two texture sizes");
   cmd->add_flag("--keep-aspect", o.reparam.keep_aspect, "New textures keep the source's aspect ratio (default: 2:1 or 1:2 of it where that packs the charts larger)");
   cmd->add_option("--gutter", o.reparam.gutter, "Texels between charts, half of it at image edges a sampler repeats across (default: mip-safe for the new image's size: every mip level clean down to the first of side <= 64 texels, at most 16: 8 texels at 362^2, 16 from 1024^2)")->check(CLI::Range(0u, 64u));
-  cmd->add_option("--block-align", o.reparam.block, "Align charts to N x N blocks (4 for BCn and ASTC 4x4; 5, 6, 8 for ASTC 5x5, 6x6, 8x8)")->capture_default_str()->check(CLI::IsMember({1u, 4u, 5u, 6u, 8u}));
+  a->block_align = cmd->add_option("--block-align", o.reparam.block, "Align charts to N x N blocks (4 for BCn and ASTC 4x4; 5, 6, 8 for ASTC 5x5, 6x6, 8x8; default: 1, or the --astc-block when square)")->capture_default_str()->check(CLI::IsMember({1u, 4u, 5u, 6u, 8u}));
+  add_gpu_output_options(cmd, a->gpu);
   cmd->add_option("--epsilon", o.reparam.triangle.epsilon, "One GMSD bound for every triangle view (eq. 12; default: per triangle, from the loss a resize to the cost would cause)")
       ->check(CLI::Range(1e-4, 0.5))
       ->each([a](const std::string&) { a->o.reparam.rate_control = false; });
@@ -113,6 +116,8 @@ void add_batch(CLI::App& app, Globals& g) {
     g.action = [&g, a]() -> int {
       pipeline::BatchOptions o = a->o;
       o.reparam.optimize = !a->no_optimize;
+      if (a->gpu.format == "astc") o.astc = a->gpu.astc;
+      o.reparam.block = block_alignment(a->gpu, o.reparam.block, a->block_align->count() > 0);
       o.version = UVPRESS_VERSION;
       o.refs = g.refs();  // the global --allow-outside-refs, recorded in every report
       if (!a->grid.empty()) o.eval_options.cost_grid = a->grid;

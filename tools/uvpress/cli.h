@@ -65,6 +65,9 @@ struct GpuOutputArgs {
   bool block_given = false;  // --astc-block was given
 };
 void add_gpu_output_options(CLI::App* cmd, GpuOutputArgs& args);
+// With --texture-format astc and a square block: the chart alignment it needs (an
+// explicit --block-align wins); else `block` unchanged.
+uint32_t block_alignment(const GpuOutputArgs& args, uint32_t block, bool block_align_given);
 // With --texture-format astc: every image of `file` encoded as an ASTC KTX2 copy (written
 // beside the output by save_gltf); the report's `gpu_textures` [{image, name, format,
 // vk_format, quality, size, levels, bytes, rmse_8bit, psnr_db, seconds}] and, in

@@ -35,29 +35,25 @@ void add_gpu_output_options(CLI::App* cmd, GpuOutputArgs& a) {
       ->type_name("fastest|fast|medium|thorough|exhaustive");
 }
 
+uint32_t block_alignment(const GpuOutputArgs& a, uint32_t block, bool block_align_given) {
+  // ASTC blocks other than 4x4 need charts aligned to the block: square footprints set it.
+  if (a.format == "astc" && !block_align_given && a.astc.block_x == a.astc.block_y) return a.astc.block_x;
+  return block;
+}
+
 nlohmann::ordered_json attach_gpu_textures(io::GltfFile& file, const GpuOutputArgs& a, std::string* summary) {
   if (a.format != "astc") return nullptr;
   const auto infos = io::attach_astc_textures(file, a.astc);
-  nlohmann::ordered_json out = nlohmann::ordered_json::array();
   uint64_t total = 0;
   double worst = 99;
-  for (const auto& t : infos) {
-    out.push_back({{"image", t.image},       {"name", t.name},
-                   {"format", "ktx2 astc " + io::block_name(a.astc) + (t.srgb ? " srgb" : " unorm")},
-                   {"vk_format", t.vk_format}, {"quality", io::to_string(a.astc.quality)},
-                   {"size", {t.width, t.height}}, {"levels", t.levels},
-                   {"bytes", t.bytes},       {"rmse_8bit", t.rmse},
-                   {"psnr_db", t.psnr_db},   {"seconds", t.seconds}});
-    total += t.bytes;
-    worst = std::min(worst, t.psnr_db);
-  }
+  for (const auto& t : infos) total += t.bytes, worst = std::min(worst, t.psnr_db);
   if (summary && !infos.empty()) {
     char text[160];
     std::snprintf(text, sizeof text, ", KTX2 (ASTC %s, %s) %s, PSNR >= %.1f dB", io::block_name(a.astc).c_str(),
                   io::to_string(a.astc.quality), human_bytes(total).c_str(), worst);
     *summary = text;
   }
-  return out;
+  return io::gpu_textures_report(infos, a.astc);
 }
 
 }  // namespace uvpress::cli

@@ -97,10 +97,7 @@ void add_reparam(CLI::App& app, Globals& g) {
   cmd->add_flag("--force-reparam", [o](int64_t) { o->guard = false; },
                 "Write reparam's layout even when a plain resize to the same texels looks better");
   cmd->callback([&g, input, output, o, no_optimize, gpu, block_align] {
-    // ASTC blocks other than 4x4 need charts aligned to the block: square footprints set
-    // --block-align unless it was given.
-    if (gpu->format == "astc" && block_align->count() == 0 && gpu->astc.block_x == gpu->astc.block_y)
-      o->block = gpu->astc.block_x;
+    o->block = block_alignment(*gpu, o->block, block_align->count() > 0);
     g.action = [&g, input, output, o, no_optimize, gpu] {
       auto t0 = std::chrono::steady_clock::now();
       if (!io::is_gltf_output_path(*output)) throw InputError(*output, "unsupported output format (use .gltf or .glb)");
@@ -170,8 +167,8 @@ void add_reparam(CLI::App& app, Globals& g) {
       nlohmann::ordered_json out = {{"input", *input}, {"output", *output}, {"device", report["device"]},
                                     {"backend", report["backend"]}, {"seconds", seconds}, {"input_bytes", in_bytes},
                                     {"output_bytes", out_bytes},
-                                    {"input_files", {{"file", in_files.file}, {"buffers", in_files.buffers}, {"images", in_files.images}}},
-                                    {"output_files", {{"file", out_files.file}, {"buffers", out_files.buffers}, {"images", out_files.images}}}};
+                                    {"input_files", {{"file", in_files.file}, {"buffers", in_files.buffers}, {"images", in_files.images}, {"ktx2", in_files.ktx2}}},
+                                    {"output_files", {{"file", out_files.file}, {"buffers", out_files.buffers}, {"images", out_files.images}, {"ktx2", out_files.ktx2}}}};
       for (auto& [key, value] : report.items())
         if (!out.contains(key)) out[key] = value;
       out["seconds"] = seconds;
