@@ -107,6 +107,14 @@ json summary_row(const json& report, const std::string& status) {
   json row = {{"name", report.value("name", "")}, {"input", report.value("input", "")}, {"status", status}};
   for (const char* key : {"error", "output", "seconds", "cost_ratio", "input_bytes", "output_bytes", "pixel_ratio_at_equal_q"})
     if (report.contains(key)) row[key] = report[key];
+  // What was written ("reparam", "resize" when the guard found the plain resize better,
+  // "untouched" when no layout could be re-parameterized) and the two q the guard compared.
+  if (report.contains("reparam") && report["reparam"].is_object()) {
+    const json& r = report["reparam"];
+    if (r.contains("chosen")) row["written"] = r["chosen"];
+    if (r.contains("guard") && r["guard"].is_object() && r["guard"].contains("q_resize"))
+      row["q"] = r["guard"][r["chosen"] == "resize" ? "q_resize" : "q_reparam"], row["q_resize"] = r["guard"]["q_resize"];
+  }
   return row;
 }
 

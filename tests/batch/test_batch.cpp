@@ -111,6 +111,7 @@ TEST_CASE("batch: reports, summary, one failure never stops the others, resume",
   CHECK(r.exit_code == 1);
   CHECK_THAT(r.out, Catch::Contains("asset0") && Catch::Contains("broken") && Catch::Contains("FAILED"));
   CHECK_THAT(r.out, Catch::Contains("4 assets: 3 ok, 0 skipped, 1 failed"));
+  CHECK_THAT(r.out, Catch::Contains("written") && Catch::Contains("q / q resize"));
   CHECK_THAT(r.err, Catch::Contains("batch [4/4]"));
   auto summary = read_json(out / "summary.json");
   CHECK(summary == read_json(dir / "run.json"));
@@ -127,6 +128,12 @@ TEST_CASE("batch: reports, summary, one failure never stops the others, resume",
     CHECK(rep["input_hash"] == pipeline::hash_asset(assets[size_t(k)].string()));
     CHECK(rep["output_hash"] == pipeline::hash_asset((out / (name + ".glb")).string()));
     CHECK(rep["reparam"]["cost_ratio"].get<double>() > 0);
+    // The summary row and the table say what was written and the two q the guard compared.
+    const auto& row = summary["assets"][k == 0 ? 0 : k + 1];
+    REQUIRE(row["name"] == name);
+    CHECK(row["written"] == rep["reparam"]["chosen"]);
+    REQUIRE(rep["reparam"]["guard"].contains("q_resize"));
+    CHECK(row["q_resize"] == rep["reparam"]["guard"]["q_resize"]);
     CHECK(test::validate_gltf(out / (name + ".glb"))["numErrors"] == 0);
   }
 

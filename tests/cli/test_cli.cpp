@@ -213,6 +213,39 @@ TEST_CASE("CLI: reparam's summary line says when the density cap kept it under -
   CHECK_THAT(k.out, !Catch::Contains("capped"));
 }
 
+TEST_CASE("CLI: reparam's summary counts every image, says when nothing was re-parameterized and why; in place, the input's bytes are the old ones",
+          "[cli][reparam]") {
+  test::Scratch dir("cli-reparam-untouched");
+  // A texture sampled through KHR_texture_transform: its layout is left as it is.
+  io::GltfFile f = pipeline::make_demo_asset({6, 64});
+  tinygltf::Value::Object xf;
+  xf["scale"] = tinygltf::Value(tinygltf::Value::Array{tinygltf::Value(2.0), tinygltf::Value(2.0)});
+  f.model.materials[0].pbrMetallicRoughness.baseColorTexture.extensions["KHR_texture_transform"] = tinygltf::Value(xf);
+  f.model.extensionsUsed.push_back("KHR_texture_transform");
+  io::save_gltf(f, (dir / "t.glb").string());
+  auto r = run_uvpress("reparam " + quoted(dir / "t.glb") + " -o " + quoted(dir / "out.glb") + " --no-optimize --report " +
+                       quoted(dir / "r.json"));
+  INFO(r.out << r.err);
+  REQUIRE(r.exit_code == 0);
+  CHECK(nlohmann::json::parse(std::ifstream(dir / "r.json"))["chosen"] == "untouched");
+  // The image's texels on both sides (it was "0 texels -> 0 texels"), and why nothing changed.
+  CHECK_THAT(r.out, Catch::Contains("4096 texels) -> ") && Catch::Contains(", 4096 texels)"));
+  CHECK_THAT(r.out, Catch::Contains("nothing re-parameterized: ") && Catch::Contains("KHR_texture_transform"));
+  CHECK_THAT(r.out, !Catch::Contains("textures 0 B"));
+
+  // In place: input_bytes are the input's before the output replaced it.
+  io::save_gltf(pipeline::make_demo_asset({8, 64}), (dir / "same.glb").string());
+  const uint64_t before = fs::file_size(dir / "same.glb");
+  r = run_uvpress("reparam " + quoted(dir / "same.glb") + " -o " + quoted(dir / "same.glb") +
+                  " --no-optimize --cost 0.25 --report " + quoted(dir / "same.json"));
+  REQUIRE(r.exit_code == 0);
+  const auto same = nlohmann::json::parse(std::ifstream(dir / "same.json"));
+  CHECK(same["input_bytes"].get<uint64_t>() == before);
+  CHECK(same["output_bytes"].get<uint64_t>() == fs::file_size(dir / "same.glb"));
+  CHECK(same["output_bytes"].get<uint64_t>() < before);
+  CHECK_THAT(r.out, Catch::Contains("4096 texels) -> "));
+}
+
 TEST_CASE("CLI: output folders are created, an unwritable output fails before the work and leaves nothing", "[cli]") {
   test::Scratch dir("cli-outputs");
   const auto good = quoted(dir / "good.glb");

@@ -6,6 +6,7 @@
 #include "io/asset_bytes.h"
 #include "io/gltf_io.h"
 #include "pipeline/reparam.h"
+#include "pipeline/texture_costs.h"
 
 #include <chrono>
 #include <cstdio>
@@ -45,12 +46,6 @@ class ProgressLine {
   std::string stage_;
   std::chrono::steady_clock::time_point last_{};
 };
-
-uint64_t texels(const nlohmann::ordered_json& textures, const char* key) {
-  uint64_t n = 0;
-  for (const auto& t : textures) n += t[key][0].get<uint64_t>() * t[key][1].get<uint64_t>();
-  return n;
-}
 
 }  // namespace
 
@@ -103,6 +98,9 @@ void add_reparam(CLI::App& app, Globals& g) {
       if (!io::is_gltf_output_path(*output)) throw InputError(*output, "unsupported output format (use .gltf or .glb)");
       g.prepare_outputs({*output});  // before the work, not after it
       io::GltfFile file = io::load_gltf(*input, g.refs());
+      // The input as it is before anything is written (the output may replace it in place).
+      const io::AssetBytes in_files = io::asset_bytes(*input, g.refs());
+      const nlohmann::ordered_json old_costs = pipeline::image_costs(file)["totals"];
       auto engine = g.make_engine();
       pipeline::ReparamOptions options = *o;
       options.optimize = !*no_optimize;
@@ -115,10 +113,12 @@ void add_reparam(CLI::App& app, Globals& g) {
       io::save_gltf(file, *output);
       double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       // The whole asset before and after: JSON, buffers and images (or the .glb).
-      const io::AssetBytes in_files = io::asset_bytes(*input, g.refs()), out_files = io::asset_bytes(*output);
+      const io::AssetBytes out_files = io::asset_bytes(*output);
       const uint64_t in_bytes = in_files.total(), out_bytes = out_files.total();
       for (const auto& w : report["warnings"]) std::fprintf(stderr, "uvpress: %s: warning: %s\n", input->c_str(), w.get<std::string>().c_str());
-      const uint64_t old_t = texels(report["textures"], "old_size"), new_t = texels(report["textures"], "new_size");
+      // Every image of the asset, re-baked or not.
+      const nlohmann::ordered_json new_costs = pipeline::image_costs(file)["totals"];
+      const uint64_t old_t = old_costs["texels"].get<uint64_t>(), new_t = new_costs["texels"].get<uint64_t>();
       // Triangles whose search never met eps keep their shape: say so on the summary line.
       std::string infeasible;
       if (const size_t n = report["triangles_infeasible"].get<size_t>())
@@ -136,7 +136,13 @@ void add_reparam(CLI::App& app, Globals& g) {
       }
       // What was written, and how it compares on screen with the resize a user would do.
       std::string verdict;
-      if (report["guard"].is_object() && report["guard"].contains("skipped")) {
+      if (report["chosen"] == "untouched") {
+        // Nothing was re-parameterized: say why instead of a cost ratio of 1 that reads as a result.
+        std::string why;
+        for (const auto& l : report["layouts"])
+          if (l.is_object() && l.contains("untouched")) why += (why.empty() ? "" : "; ") + l["untouched"].get<std::string>();
+        verdict = "; nothing re-parameterized" + (why.empty() ? std::string(" (no textured layout)") : ": " + why);
+      } else if (report["guard"].is_object() && report["guard"].contains("skipped")) {
         verdict = "; not compared with a plain resize (eval cannot score this asset)";
       } else if (report["guard"].is_object()) {
         const auto& gr = report["guard"];
@@ -149,15 +155,12 @@ void add_reparam(CLI::App& app, Globals& g) {
                         gr["q_resize"].get<double>(), gr["q_reparam"].get<double>());
         verdict = text;
       }
-      // Texture bytes as encoded, and VRAM block-compressed (BC7/ASTC 4x4) with mip-maps.
-      std::string textures;
-      if (report.contains("texture_totals")) {
-        const auto& tt = report["texture_totals"];
-        textures = ", textures " + human_bytes(tt["old"]["bytes"].get<uint64_t>()) + " -> " +
-                   human_bytes(tt["new"]["bytes"].get<uint64_t>()) + ", VRAM (BC7, mips) " +
-                   human_bytes(tt["old"]["vram_bc7_mips"].get<uint64_t>()) + " -> " +
-                   human_bytes(tt["new"]["vram_bc7_mips"].get<uint64_t>());
-      }
+      // Texture bytes as encoded, and VRAM block-compressed (BC7/ASTC 4x4) with mip-maps,
+      // over every image of the asset (the report's texture_totals count the re-baked ones).
+      const std::string textures = ", textures " + human_bytes(old_costs["bytes"].get<uint64_t>()) + " -> " +
+                                   human_bytes(new_costs["bytes"].get<uint64_t>()) + ", VRAM (BC7, mips) " +
+                                   human_bytes(old_costs["vram_bc7_mips"].get<uint64_t>()) + " -> " +
+                                   human_bytes(new_costs["vram_bc7_mips"].get<uint64_t>());
       std::printf("%s (%s, %llu texels) -> %s (%s, %llu texels)%s%s, cost ratio %.3f%s%s%s, %.1f s\n", input->c_str(),
                   human_bytes(in_bytes).c_str(), (unsigned long long)old_t, output->c_str(), human_bytes(out_bytes).c_str(),
                   (unsigned long long)new_t, textures.c_str(), gpu_summary.c_str(), report["cost_ratio"].get<double>(), capped.c_str(),
