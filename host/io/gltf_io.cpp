@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <fstream>
 #include <cctype>
 #include <cstdio>
 #include <filesystem>
@@ -340,7 +341,17 @@ void save_glb(const GltfFile& file, const std::string& path) {
   writer.commit();
 }
 
-void save_text_gltf(const GltfFile& file, const std::string& path) {
+// True when `path` is a regular file holding exactly `bytes`.
+bool holds_bytes(const fs::path& path, const std::vector<uint8_t>& bytes) {
+  std::error_code ec;
+  if (!fs::is_regular_file(path, ec) || fs::file_size(path, ec) != bytes.size() || ec) return false;
+  std::ifstream in(path, std::ios::binary);
+  std::vector<char> have(bytes.size());
+  return in.read(have.data(), std::streamsize(have.size())) && std::equal(have.begin(), have.end(), bytes.begin(), bytes.end(),
+                                                                          [](char a, uint8_t b) { return uint8_t(a) == b; });
+}
+
+void save_text_gltf(const GltfFile& file, const std::string& path, const SaveOptions& options) {
   tinygltf::Model m = file.model;
   fs::path target(path);
   const std::string stem = target.stem().string();
@@ -362,8 +373,17 @@ void save_text_gltf(const GltfFile& file, const std::string& path) {
     const auto& bytes = file.image_bytes[i];
     if (view_holds(file.model, file.model.images[i], bytes)) continue;
     std::string original = image.uri.rfind("data:", 0) == 0 ? "" : fs::path(image.uri).filename().string();
-    std::string name = unique(stem + "_" + (original.empty() ? "image" + std::to_string(i) + extension_for(bytes)
-                                                             : original));
+    std::string name;
+    if (options.keep_image_names && !original.empty()) {
+      // Its own name, unless this output already uses it, it is the .gltf itself, or the
+      // folder holds other bytes under it (never overwrite a file that is not ours).
+      const std::string own = safe_name(original);
+      if (!used.count(own) && own != target.filename().string() && own != stem + ".bin" &&
+          (!fs::exists(dir / own) || holds_bytes(dir / own, bytes)))
+        name = unique(own);
+    }
+    if (name.empty())
+      name = unique(stem + "_" + (original.empty() ? "image" + std::to_string(i) + extension_for(bytes) : original));
     writer.add((dir / name).string(), bytes);
     image.uri = name;
     image.bufferView = -1;
@@ -393,10 +413,10 @@ void save_text_gltf(const GltfFile& file, const std::string& path) {
 
 }  // namespace
 
-void save_gltf(const GltfFile& file, const std::string& path) {
+void save_gltf(const GltfFile& file, const std::string& path, const SaveOptions& options) {
   std::string ext = extension_of(path);
   if (ext == ".glb") return save_glb(file, path);
-  if (ext == ".gltf") return save_text_gltf(file, path);
+  if (ext == ".gltf") return save_text_gltf(file, path, options);
   throw InputError(path, "unsupported output format '" + ext + "' (use .gltf or .glb)");
 }
 

@@ -46,12 +46,22 @@ bool is_supported_required_extension(const std::string& name);
 // for byte, must pass check_image (a header that decodes, its mimeType, its size).
 GltfFile load_gltf(const std::string& path, const RefPolicy& refs = {});
 
+// How save_gltf names the files beside a .gltf.
+struct SaveOptions {
+  // Each image keeps its own file name (Texture.png) where no other file of this output
+  // takes it and the folder holds no file of that name with other bytes (the input's own
+  // image when writing beside it, another asset's); else, and by default, <stem>_<name>,
+  // which never collides across assets written to one folder (batch relies on it).
+  bool keep_image_names = false;
+};
+
 // Writes by extension: .glb (one binary chunk holding every buffer and image) or .gltf
-// (pretty JSON plus <stem>.bin and one file per image beside it). Either way, each image's
-// KTX2 copy that still matches its bytes is written beside the output as
-// <stem>_<image>.ktx2 and named in the image's extras (see Ktx2Sidecar). All files are written
-// to temporaries and renamed at the end: no partial output. Throws InputError.
-void save_gltf(const GltfFile& file, const std::string& path);
+// (pretty JSON plus <stem>.bin and one file per image beside it, named as `options` says).
+// Either way, each image's KTX2 copy that still matches its bytes is written beside the
+// output as <stem>_<image>.ktx2 and named in the image's extras (see Ktx2Sidecar). All
+// files are written to temporaries and renamed at the end: no partial output. Throws
+// InputError.
+void save_gltf(const GltfFile& file, const std::string& path, const SaveOptions& options = {});
 
 // True for the output extensions save_gltf takes.
 bool is_gltf_output_path(const std::string& path);

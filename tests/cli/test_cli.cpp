@@ -101,10 +101,11 @@ TEST_CASE("CLI: copy writes a valid .glb and .gltf", "[cli][shared]") {
     std::ifstream in(report_path);
     const auto report = nlohmann::json::parse(in);
     CHECK(report["input_bytes"].get<uint64_t>() == whole);
-    uint64_t written = 0;  // the .glb, or the .gltf with its .bin and image beside it
+    uint64_t written = 0;  // the .glb, or the .gltf with its .bin and image (its own name kept) beside it
     for (const auto& e : fs::directory_iterator(dir.path())) {
       const std::string file = e.path().filename().string(), ext = e.path().extension().string();
-      if (std::string(name) == "truck.glb" ? file == "truck.glb" : (file.rfind("truck", 0) == 0 && ext != ".glb" && ext != ".json"))
+      if (std::string(name) == "truck.glb" ? file == "truck.glb"
+                                           : (file == "truck.gltf" || file == "truck.bin" || file == "CesiumMilkTruck.png"))
         written += fs::file_size(e.path());
     }
     CHECK(report["output_bytes"].get<uint64_t>() == written);
@@ -244,6 +245,43 @@ TEST_CASE("CLI: reparam's summary counts every image, says when nothing was re-p
   CHECK(same["output_bytes"].get<uint64_t>() == fs::file_size(dir / "same.glb"));
   CHECK(same["output_bytes"].get<uint64_t>() < before);
   CHECK_THAT(r.out, Catch::Contains("4096 texels) -> "));
+}
+
+TEST_CASE("CLI: copy keeps image file names unless that would overwrite other bytes", "[cli]") {
+  test::Scratch dir("cli-copy-names");
+  test::fs::create_directories(dir / "in");
+  test::fs::create_directories(dir / "out");
+  io::save_gltf(pipeline::make_demo_asset({6, 32}), (dir / "in" / "a.gltf").string());
+  io::save_gltf(pipeline::make_demo_asset({6, 48}), (dir / "in" / "b.gltf").string());
+  // The same image name, other bytes: b's texture renamed to a's.
+  const auto uri_of = [](const fs::path& p) {
+    return nlohmann::json::parse(std::ifstream(p))["images"][0]["uri"].get<std::string>();
+  };
+  const std::string image = uri_of(dir / "in" / "a.gltf");
+  {
+    auto j = nlohmann::json::parse(std::ifstream(dir / "in" / "b.gltf"));
+    test::fs::create_directories(dir / "in" / "b");
+    test::fs::rename(dir / "in" / j["images"][0]["uri"].get<std::string>(), dir / "in" / "b" / image);
+    j["images"][0]["uri"] = "b/" + image;
+    std::ofstream(dir / "in" / "b.gltf") << j.dump();
+  }
+  const auto copy = [&](const char* in, const char* out) {
+    auto r = run_uvpress("copy " + quoted(dir / "in" / in) + " -o " + quoted(dir / out));
+    INFO(r.err);
+    REQUIRE(r.exit_code == 0);
+    return uri_of(dir / out);
+  };
+  // Into an empty folder: the image keeps its name.
+  CHECK(copy("a.gltf", "out/a.gltf") == image);
+  // Another asset whose image has that name but other bytes: a's file is not overwritten.
+  const std::string b_name = copy("b.gltf", "out/b.gltf");
+  CHECK(b_name != image);
+  CHECK(b_name.rfind("b_", 0) == 0);
+  CHECK(io::load_gltf((dir / "out" / "a.gltf").string()).image_bytes[0] ==
+        io::load_gltf((dir / "in" / "a.gltf").string()).image_bytes[0]);
+  // Beside the input, the same bytes: the input's own file serves both.
+  CHECK(copy("a.gltf", "in/a2.gltf") == image);
+  CHECK(test::validate_gltf(dir / "out" / "b.gltf")["numErrors"] == 0);
 }
 
 TEST_CASE("CLI: output folders are created, an unwritable output fails before the work and leaves nothing", "[cli]") {

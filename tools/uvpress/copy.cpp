@@ -31,7 +31,7 @@ void add_copy(CLI::App& app, Globals& g) {
       g.stage("load", t0);
       std::string gpu_summary;
       const auto gpu_textures = attach_gpu_textures(file, *gpu, &gpu_summary);
-      io::save_gltf(file, *output);
+      io::save_gltf(file, *output, {/*keep_image_names=*/true});
       g.stage("save", t0);
       // The whole asset (JSON, buffers, images) before and after; images are carried byte
       // for byte, so their costs are the same on both sides.

@@ -285,7 +285,7 @@ void flatten_gltf(const Globals& g, const std::string& input, const std::string&
     if (overlaps_new)
       throw InputError(output, std::to_string(overlaps_new) + " pairs of triangles overlap in the new UVs; nothing written");
   }
-  io::save_gltf(file, output);
+  io::save_gltf(file, output, {/*keep_image_names=*/true});
   g.stage("save", t0);
 }
 

@@ -110,7 +110,7 @@ void add_reparam(CLI::App& app, Globals& g) {
       std::string gpu_summary;
       const auto gpu_textures = attach_gpu_textures(file, *gpu, &gpu_summary);
       if (!gpu_textures.is_null()) report["gpu_textures"] = gpu_textures;
-      io::save_gltf(file, *output);
+      io::save_gltf(file, *output, {/*keep_image_names=*/true});
       double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       // The whole asset before and after: JSON, buffers and images (or the .glb).
       const io::AssetBytes out_files = io::asset_bytes(*output);
