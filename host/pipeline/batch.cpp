@@ -1,6 +1,7 @@
 #include "pipeline/batch.h"
 
 #include "core/error.h"
+#include "core/report_schema.h"
 #include "core/stopwatch.h"
 #include "io/asset_bytes.h"
 #include "io/atomic_file.h"
@@ -262,7 +263,7 @@ bool up_to_date(const BatchItem& item, const BatchOptions& o) {
 json process_asset(const BatchItem& item, const BatchOptions& o, engine::Engine* engine, const std::string& engine_error) {
   const Stopwatch t0;
   const fs::path out = output_path(item, o);
-  json report = {{"name", item.name}, {"input", item.input}, {"position", item.position},
+  json report = {{"schema", kReportSchema}, {"name", item.name}, {"input", item.input}, {"position", item.position},
                  {"input_hash", hash_asset(item.input, o.refs)}, {"options", options_json(o)}};
   try {
     if (!engine) throw engine::EngineError(engine_error.empty() ? "no engine" : engine_error);
@@ -437,7 +438,7 @@ json run_batch(const BatchOptions& o, const EngineFactory& make_engine, const Ba
         const BatchItem& item = todo[size_t(k)];
         std::string why = WIFSIGNALED(status) ? "crashed with " + signal_name(WTERMSIG(status))
                                               : "worker exited with status " + std::to_string(WEXITSTATUS(status));
-        json r = {{"name", item.name}, {"input", item.input}, {"position", item.position},
+        json r = {{"schema", kReportSchema}, {"name", item.name}, {"input", item.input}, {"position", item.position},
                   {"input_hash", hash_asset(item.input, o.refs)}, {"options", options_json(o)}, {"status", "failed"},
                   {"error", item.input + ": " + why}};
         remove_outputs(item, o);
@@ -463,7 +464,7 @@ json run_batch(const BatchOptions& o, const EngineFactory& make_engine, const Ba
   }
   json assets = json::array();
   for (auto& [pos, row] : rows) assets.push_back(row);
-  json summary = {{"manifest", o.manifest}, {"output_dir", o.output_dir},
+  json summary = {{"schema", kReportSchema}, {"manifest", o.manifest}, {"output_dir", o.output_dir},
                   {"shard", {{"index", o.shard_index}, {"count", o.shard_count}}},
                   {"jobs", o.jobs}, {"threads_per_job", threads}, {"options", options_json(o)},
                   {"counts", counts_of(assets)}, {"assets", assets}, {"seconds", t0.seconds()}};
@@ -491,7 +492,7 @@ json collect_batch(const BatchOptions& o) {
   }
   BatchOptions whole = o;
   whole.shard_index = 0, whole.shard_count = 1;
-  json summary = {{"manifest", o.manifest}, {"output_dir", o.output_dir}, {"collected", true},
+  json summary = {{"schema", kReportSchema}, {"manifest", o.manifest}, {"output_dir", o.output_dir}, {"collected", true},
                   {"options", options_json(o)}, {"counts", counts_of(assets)}, {"assets", assets},
                   {"seconds", t0.seconds()}};
   write_json(summary_path(whole), summary);

@@ -3,6 +3,7 @@
 #include <catch2/catch.hpp>
 
 #include "batch/corpus.h"
+#include "core/report_schema.h"
 #include "io/atomic_file.h"
 #include "io/gltf_io.h"
 #include "io/references.h"
@@ -116,6 +117,7 @@ TEST_CASE("batch: reports, summary, one failure never stops the others, resume",
   auto summary = read_json(out / "summary.json");
   CHECK(summary == read_json(dir / "run.json"));
   CHECK(summary["counts"]["ok"] == 3);
+  CHECK(summary["schema"] == kReportSchema);
   CHECK(summary["counts"]["failed"] == 1);
   auto broken = read_json(out / "broken.report.json");
   CHECK(broken["status"] == "failed");
@@ -125,6 +127,7 @@ TEST_CASE("batch: reports, summary, one failure never stops the others, resume",
     std::string name = "asset" + std::to_string(k);
     auto rep = read_json(out / (name + ".report.json"));
     CHECK(rep["status"] == "ok");
+    CHECK(rep["schema"] == kReportSchema);
     CHECK(rep["input_hash"] == pipeline::hash_asset(assets[size_t(k)].string()));
     CHECK(rep["output_hash"] == pipeline::hash_asset((out / (name + ".glb")).string()));
     CHECK(rep["reparam"]["cost_ratio"].get<double>() > 0);

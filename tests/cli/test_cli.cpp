@@ -2,6 +2,7 @@
 // partial output, and the documented commands.
 #include <catch2/catch.hpp>
 
+#include "core/report_schema.h"
 #include "io/gltf_io.h"
 #include "pipeline/demo_asset.h"
 #include "support.h"
@@ -228,7 +229,10 @@ TEST_CASE("CLI: reparam's summary counts every image, says when nothing was re-p
                        quoted(dir / "r.json"));
   INFO(r.out << r.err);
   REQUIRE(r.exit_code == 0);
-  CHECK(nlohmann::json::parse(std::ifstream(dir / "r.json"))["chosen"] == "untouched");
+  const auto report = nlohmann::ordered_json::parse(std::ifstream(dir / "r.json"));
+  CHECK(report["chosen"] == "untouched");
+  CHECK(report["schema"] == kReportSchema);
+  CHECK(report.begin().key() == "schema");
   // The image's texels on both sides (it was "0 texels -> 0 texels"), and why nothing changed.
   CHECK_THAT(r.out, Catch::Contains("4096 texels) -> ") && Catch::Contains(", 4096 texels)"));
   CHECK_THAT(r.out, Catch::Contains("nothing re-parameterized: ") && Catch::Contains("KHR_texture_transform"));

@@ -1,6 +1,7 @@
 // uvpress: makes textured 3-D assets cheaper without making them look worse.
 // Exit codes: 0 ok, 1 runtime or input error (one stderr line: file and reason), 2 usage.
 #include "cli.h"
+#include "core/report_schema.h"
 
 #include "core/error.h"
 #include "io/atomic_file.h"
@@ -34,8 +35,11 @@ void Globals::prepare_outputs(const std::vector<std::string>& files, const std::
 
 void Globals::write_report(const nlohmann::ordered_json& report) const {
   if (report.empty() || this->report.empty()) return;
+  nlohmann::ordered_json out = {{"schema", kReportSchema}};
+  for (const auto& [key, value] : report.items())
+    if (key != "schema") out[key] = value;
   io::AtomicWriter writer;
-  writer.add(this->report, report.dump(2) + "\n");
+  writer.add(this->report, out.dump(2) + "\n");
   writer.commit();
 }
 
