@@ -74,7 +74,9 @@ json inspect(const io::GltfFile& file) {
                  {"role", io::to_string(u.role)},
                  {"slot", u.slot},
                  {"texture", u.texture},
-                 {"primitive", u.primitive},
+                 // glTF's numbering, as in `primitives` (mesh m, its primitive p: "m.p").
+                 {"mesh", asset.primitives[size_t(u.primitive)].mesh},
+                 {"primitive", asset.primitives[size_t(u.primitive)].primitive},
                  {"tex_coord", u.tex_coord},
                  {"wrap", {u.wrap_s, u.wrap_t}},
                  {"tiled", u.tiled}};
@@ -128,9 +130,10 @@ std::string format_inspection(const json& info) {
     s += buf;
     if (img["uses"].empty()) s += "  unused\n";
     for (const auto& u : img["uses"]) {
-      std::snprintf(buf, sizeof buf, "  %s of material %d \"%s\" on primitive %d via TEXCOORD_%d%s%s\n",
+      std::snprintf(buf, sizeof buf, "  %s of material %d \"%s\" on primitive %d.%d via TEXCOORD_%d%s%s\n",
                     u["role"].get<std::string>().c_str(), u["material"].get<int>(),
-                    u["material_name"].get<std::string>().c_str(), u["primitive"].get<int>(), u["tex_coord"].get<int>(),
+                    u["material_name"].get<std::string>().c_str(), u["mesh"].get<int>(), u["primitive"].get<int>(),
+                    u["tex_coord"].get<int>(),
                     u.contains("transform") ? " with KHR_texture_transform" : "",
                     u["tiled"].get<bool>() ? " - tiled (UVs leave [0,1] under REPEAT): its layout is left as it is" : "");
       s += buf;

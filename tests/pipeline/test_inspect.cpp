@@ -5,6 +5,8 @@
 #include "pipeline/inspect.h"
 #include "support.h"
 
+#include <set>
+
 using namespace uvpress;
 
 namespace {
@@ -85,4 +87,24 @@ TEST_CASE("info: Fox keeps its skin and three animations", "[pipeline][info][sha
   CHECK(info["triangles"] == 576);
   CHECK(info["counts"]["skins"] == 1);
   CHECK(info["counts"]["animations"] == 3);
+}
+
+TEST_CASE("info: one numbering of primitives, glTF's mesh.primitive, in every section", "[pipeline][info][shared]") {
+  if (!test::shared_dir()) UVPRESS_SKIP("../shared is absent");
+  // The truck's wheels are mesh 1's primitive 0, the fourth primitive in file order: the
+  // image section said "primitive 3" where the primitive section says "1.0".
+  const auto info = info_of("CesiumMilkTruck/glTF/CesiumMilkTruck.gltf");
+  std::set<std::pair<int, int>> listed;
+  for (const auto& p : info["primitives"]) listed.insert({p["mesh"].get<int>(), p["primitive"].get<int>()});
+  REQUIRE(info["images"].size() == 1);
+  std::set<std::pair<int, int>> used;
+  for (const auto& u : info["images"][0]["uses"]) {
+    const std::pair<int, int> key = {u["mesh"].get<int>(), u["primitive"].get<int>()};
+    CHECK(listed.count(key) == 1);
+    used.insert(key);
+  }
+  CHECK(used == std::set<std::pair<int, int>>{{0, 0}, {1, 0}});
+  const std::string text = pipeline::format_inspection(info);
+  CHECK(text.find("on primitive 1.0 via TEXCOORD_0") != std::string::npos);
+  CHECK(text.find("on primitive 3 ") == std::string::npos);
 }
