@@ -74,11 +74,12 @@ uint32_t obj_index(long i, size_t count, const std::string& path, size_t line) {
 
 }  // namespace
 
-Mesh read_obj(const std::string& path) {
+Mesh read_obj(const std::string& path, ObjExtras* extras) {
   Lines in{load_text(path)};
   Mesh m;
+  ObjExtras x;
   std::string_view line;
-  bool any_without_uv = false;
+  bool any_without_uv = false, any_without_normal = false;
   while (in.next(line)) {
     auto t = tokens(line);
     if (t.empty() || t[0][0] == '#') continue;
@@ -89,9 +90,12 @@ Mesh read_obj(const std::string& path) {
       if (t.size() < 3) throw InputError(path, "line " + std::to_string(in.number) + ": vt needs 2 coordinates");
       m.uvs.push_back(to_double(t[1], path, in.number));
       m.uvs.push_back(to_double(t[2], path, in.number));
+    } else if (t[0] == "vn") {
+      if (t.size() < 4) throw InputError(path, "line " + std::to_string(in.number) + ": vn needs 3 coordinates");
+      for (int k = 1; k <= 3; ++k) x.normals.push_back(to_double(t[size_t(k)], path, in.number));
     } else if (t[0] == "f") {
       if (t.size() < 4) throw InputError(path, "line " + std::to_string(in.number) + ": face needs 3 vertices");
-      std::vector<uint32_t> v, vt;
+      std::vector<uint32_t> v, vt, vn;
       for (size_t k = 1; k < t.size(); ++k) {
         std::string_view c = t[k];
         size_t s1 = c.find('/');
@@ -101,21 +105,38 @@ Mesh read_obj(const std::string& path) {
           size_t s2 = rest.find('/');
           std::string_view uv = rest.substr(0, s2);
           if (!uv.empty()) vt.push_back(obj_index(to_long(uv, path, in.number), m.uv_count(), path, in.number));
+          if (s2 != std::string_view::npos && s2 + 1 < rest.size())
+            vn.push_back(obj_index(to_long(rest.substr(s2 + 1), path, in.number), x.normals.size() / 3, path, in.number));
         }
       }
       if (!vt.empty() && vt.size() != v.size())
         throw InputError(path, "line " + std::to_string(in.number) + ": face mixes corners with and without vt");
+      if (!vn.empty() && vn.size() != v.size())
+        throw InputError(path, "line " + std::to_string(in.number) + ": face mixes corners with and without vn");
       if (vt.empty()) any_without_uv = true;
+      if (vn.empty()) any_without_normal = true;
       for (size_t k = 1; k + 1 < v.size(); ++k) {
         m.triangles.insert(m.triangles.end(), {v[0], v[k], v[k + 1]});
         if (!vt.empty()) m.uv_triangles.insert(m.uv_triangles.end(), {vt[0], vt[k], vt[k + 1]});
+        if (!vn.empty()) x.normal_triangles.insert(x.normal_triangles.end(), {vn[0], vn[k], vn[k + 1]});
       }
+    } else if (t[0] == "mtllib" || t[0] == "usemtl") {
+      // The rest of the line, as written (names may hold spaces).
+      std::string_view rest = line.substr(line.find(t[0]) + t[0].size());
+      while (!rest.empty() && (rest.front() == ' ' || rest.front() == '\t')) rest.remove_prefix(1);
+      while (!rest.empty() && (rest.back() == ' ' || rest.back() == '\t' || rest.back() == '\r')) rest.remove_suffix(1);
+      if (t[0] == "mtllib") x.mtllib.emplace_back(rest);
+      else x.usemtl.emplace_back(m.triangle_count(), std::string(rest));
+    } else if (t[0] == "o" || t[0] == "g" || t[0] == "s") {
+      ++x.dropped;
     }
-    // mtllib, usemtl, o, g, s, vn: not needed for geometry (a missing .mtl is fine).
   }
   if (m.triangles.empty()) throw InputError(path, "no faces");
   if (any_without_uv) m.uv_triangles.clear();  // UVs only when every face has them
   if (m.uv_triangles.empty()) m.uvs.clear();
+  if (any_without_normal) x.normal_triangles.clear();  // normals likewise
+  if (x.normal_triangles.empty()) x.normals.clear();
+  if (extras) *extras = std::move(x);
   return m;
 }
 
@@ -166,17 +187,21 @@ Mesh read_off(const std::string& path) {
   return m;
 }
 
-Mesh read_mesh(const std::string& path) {
+Mesh read_mesh(const std::string& path, ObjExtras* extras) {
   std::string ext = extension_of(path);
-  if (ext == ".obj") return read_obj(path);
+  if (extras) *extras = {};
+  if (ext == ".obj") return read_obj(path, extras);
   if (ext == ".off") return read_off(path);
   read_file(path);  // a missing file says so before the extension does
   throw InputError(path, "unsupported mesh format '" + ext + "' (expected .obj or .off)");
 }
 
-void write_obj(const Mesh& m, const std::string& path) {
+void write_obj(const Mesh& m, const std::string& path, const ObjExtras* extras) {
   std::string out = "# written by uvpress\n";
   char buf[128];
+  const bool normals = extras && extras->normal_triangles.size() == m.triangles.size() && !m.triangles.empty();
+  if (extras)
+    for (const std::string& lib : extras->mtllib) out += "mtllib " + lib + "\n";
   for (size_t i = 0; i < m.vertex_count(); ++i) {
     std::snprintf(buf, sizeof buf, "v %.9g %.9g %.9g\n", m.positions[3 * i], m.positions[3 * i + 1],
                   m.positions[3 * i + 2]);
@@ -186,9 +211,27 @@ void write_obj(const Mesh& m, const std::string& path) {
     std::snprintf(buf, sizeof buf, "vt %.9g %.9g\n", m.uvs[2 * i], m.uvs[2 * i + 1]);
     out += buf;
   }
+  if (normals)
+    for (size_t i = 0; i < extras->normals.size() / 3; ++i) {
+      std::snprintf(buf, sizeof buf, "vn %.9g %.9g %.9g\n", extras->normals[3 * i], extras->normals[3 * i + 1],
+                    extras->normals[3 * i + 2]);
+      out += buf;
+    }
+  size_t next_material = 0;
   for (size_t f = 0; f < m.triangle_count(); ++f) {
+    while (extras && next_material < extras->usemtl.size() && extras->usemtl[next_material].first <= f)
+      out += "usemtl " + extras->usemtl[next_material++].second + "\n";
     const uint32_t* v = &m.triangles[3 * f];
-    if (m.has_uvs()) {
+    if (normals) {
+      const uint32_t* n = &extras->normal_triangles[3 * f];
+      if (m.has_uvs()) {
+        const uint32_t* t = &m.uv_triangles[3 * f];
+        std::snprintf(buf, sizeof buf, "f %u/%u/%u %u/%u/%u %u/%u/%u\n", v[0] + 1, t[0] + 1, n[0] + 1, v[1] + 1, t[1] + 1,
+                      n[1] + 1, v[2] + 1, t[2] + 1, n[2] + 1);
+      } else {
+        std::snprintf(buf, sizeof buf, "f %u//%u %u//%u %u//%u\n", v[0] + 1, n[0] + 1, v[1] + 1, n[1] + 1, v[2] + 1, n[2] + 1);
+      }
+    } else if (m.has_uvs()) {
       const uint32_t* t = &m.uv_triangles[3 * f];
       std::snprintf(buf, sizeof buf, "f %u/%u %u/%u %u/%u\n", v[0] + 1, t[0] + 1, v[1] + 1, t[1] + 1, v[2] + 1,
                     t[2] + 1);

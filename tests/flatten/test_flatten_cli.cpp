@@ -208,3 +208,51 @@ TEST_CASE("flatten CLI: glTF charts with holes flatten, a chart that cannot is s
     }
   }
 }
+
+TEST_CASE("flatten keeps an OBJ's materials and normals, and says that its UVs were replaced", "[flatten][cli]") {
+  test::Scratch dir("flatten-obj-extras");
+  // The bump grid with a material library, two materials, per-corner normals, old UVs and
+  // a group line; faces written as quads split by the reader.
+  const int n = 6;
+  std::ostringstream obj;
+  obj << "mtllib my materials.mtl\ng sheet\n";
+  for (int j = 0; j <= n; ++j)
+    for (int i = 0; i <= n; ++i) {
+      const double x = double(i) / n, y = double(j) / n;
+      obj << "v " << x << ' ' << y << ' ' << 0.3 * std::sin(3 * x) * y << "\nvt " << x << ' ' << y << '\n';
+    }
+  obj << "vn 0 0 1\nvn 0 0.6 0.8\n";
+  for (int j = 0; j < n; ++j) {
+    if (j == 0) obj << "usemtl red\n";
+    if (j == n / 2) obj << "usemtl blue paint\n";
+    for (int i = 0; i < n; ++i) {
+      const int a = j * (n + 1) + i + 1, b = a + 1, c = a + n + 1, d = c + 1, vn = 1 + (i + j) % 2;
+      obj << "f " << a << '/' << a << '/' << vn << ' ' << b << '/' << b << '/' << vn << ' ' << d << '/' << d << '/' << vn
+          << ' ' << c << '/' << c << '/' << vn << '\n';
+    }
+  }
+  std::ofstream(dir / "sheet.obj") << obj.str();
+  io::ObjExtras in_extras;
+  const Mesh in = io::read_mesh((dir / "sheet.obj").string(), &in_extras);
+  REQUIRE(in_extras.normal_triangles.size() == in.triangles.size());
+
+  auto r = run_uvpress("flatten " + quoted(dir / "sheet.obj") + " -o " + quoted(dir / "flat.obj"));
+  INFO(r.out << r.err);
+  REQUIRE(r.exit_code == 0);
+  CHECK_THAT(r.out, Catch::Contains("the input's UVs (vt) replaced") && Catch::Contains("1 o/g/s lines not kept"));
+  io::ObjExtras out_extras;
+  const Mesh out = io::read_mesh((dir / "flat.obj").string(), &out_extras);
+  CHECK(out.triangles == in.triangles);
+  CHECK(out.uvs != in.uvs);  // new UVs
+  CHECK(out_extras.mtllib == std::vector<std::string>{"my materials.mtl"});
+  CHECK(out_extras.usemtl == in_extras.usemtl);
+  REQUIRE(out_extras.usemtl.size() == 2);
+  CHECK(out_extras.usemtl[1] == std::pair<size_t, std::string>{size_t(2 * n * n / 2), "blue paint"});
+  CHECK(out_extras.normals == in_extras.normals);
+  CHECK(out_extras.normal_triangles == in_extras.normal_triangles);
+  // A mesh without any of it says nothing about it.
+  std::ofstream(dir / "plain.obj") << grid_obj(6);
+  r = run_uvpress("flatten " + quoted(dir / "plain.obj") + " -o " + quoted(dir / "plain-flat.obj"));
+  REQUIRE(r.exit_code == 0);
+  CHECK_THAT(r.out, !Catch::Contains("replaced") && !Catch::Contains("not kept"));
+}

@@ -289,10 +289,15 @@ void flatten_gltf(const Globals& g, const std::string& input, const std::string&
   g.stage("save", t0);
 }
 
+// An OBJ keeps its materials (mtllib, usemtl) and normals (vn); `note` says what the
+// rewrite changed besides: the input's own UVs replaced, group lines not kept.
 void flatten_mesh(const Globals& g, const std::string& input, const std::string& output, const flatten::Options& o,
-                  std::vector<Chart>& charts, std::chrono::steady_clock::time_point& t0) {
+                  std::vector<Chart>& charts, std::chrono::steady_clock::time_point& t0, std::string& note) {
   Chart chart;
-  chart.mesh = io::read_mesh(input);
+  io::ObjExtras extras;
+  chart.mesh = io::read_mesh(input, &extras);
+  if (chart.mesh.has_uvs()) note += ", the input's UVs (vt) replaced";
+  if (extras.dropped) note += ", " + std::to_string(extras.dropped) + " o/g/s lines not kept";
   g.stage("load", t0);
   chart.result = run_chart(chart.mesh, o, input, "");
   g.stage("flatten", t0);
@@ -304,7 +309,7 @@ void flatten_mesh(const Globals& g, const std::string& input, const std::string&
   chart.result.flips = flatten::count_flips(out.triangles, out.uvs);
   if (chart.result.flips)
     throw InputError(output, std::to_string(chart.result.flips) + " flipped triangles in the UVs; nothing written");
-  io::write_obj(out, output);
+  io::write_obj(out, output, &extras);
   g.stage("save", t0);
   charts.push_back(std::move(chart));
 }
@@ -367,8 +372,9 @@ void add_flatten(CLI::App& app, Globals& g) {
       std::vector<Chart> charts;
       std::vector<std::string> uv_sets;  // glTF: the TEXCOORD sets written
       size_t overlaps_new = 0;           // glTF: always 0 when written
+      std::string mesh_note;             // OBJ/OFF: what the rewrite changed besides the UVs
       if (gltf_in) flatten_gltf(g, a->input, a->output, o, charts, uv_sets, overlaps_new, t0);
-      else flatten_mesh(g, a->input, a->output, o, charts, t0);
+      else flatten_mesh(g, a->input, a->output, o, charts, t0, mesh_note);
 
       if (!a->log.empty()) {
         std::vector<flatten::LabelledLog> logs;
@@ -442,7 +448,7 @@ void add_flatten(CLI::App& app, Globals& g) {
       }
       // What a person reads: triangles, charts, time, flips, what was skipped and the UV
       // set written. The solver's own figures (eta, E_c) are in --report and -v.
-      std::string extra;
+      std::string extra = mesh_note;
       if (skipped) extra += ", " + std::to_string(skipped) + (skipped == 1 ? " chart" : " charts") + " skipped (input UVs kept)";
       if (filled) extra += ", " + std::to_string(filled) + (filled == 1 ? " hole" : " holes") + " filled for the solve";
       std::string sets;
