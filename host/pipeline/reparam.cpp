@@ -322,6 +322,8 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
     }
     std::vector<std::vector<double>> new_uv_of(charts.size());
     std::vector<std::string> overlapped;  // charts fallen back to their input shape, with their new pairs
+    const std::string mesh_stage = "mesh stage (" + cand.name + ", layout " + std::to_string(li) + ")";
+    if (progress && cand.reshape) progress(mesh_stage, 0, charts.size());
     for (size_t c = 0; c < charts.size(); ++c) {
       const Chart& ch = charts[c];
       if (!cand.reshape || P.results[ch.uv_set].empty() || ch.rigid || ch.shared) {
@@ -374,7 +376,7 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
           ++outline_failed;
         }
       }
-      if (progress) progress("mesh stage (" + cand.name + ", layout " + std::to_string(li) + ")", c + 1, charts.size());
+      if (progress) progress(mesh_stage, c + 1, charts.size());
     }
     if (!overlapped.empty()) {
       std::string list;
@@ -572,6 +574,8 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
                         new_uv[si].data(), prim.vertex_count()});
     }
     size_t baked_count = 0, exact_texels = 0;
+    const std::string bake_stage = "re-bake (" + cand.name + ", layout " + std::to_string(li) + ")";
+    if (progress) progress(bake_stage, 0, L.images.size());
     for (int i : L.images) {
       const io::AssetImage& img = asset.images[size_t(i)];
       const std::string name = file.path + ": image " + std::to_string(i);
@@ -635,7 +639,7 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
                               {"new_size", {baked.width, baked.height}},
                               {"old_bytes", old_bytes.size()},
                               {"new_bytes", file.image_bytes[size_t(i)].size()}});
-      if (progress) progress("re-bake (" + cand.name + ", layout " + std::to_string(li) + ")", ++baked_count, L.images.size());
+      if (progress) progress(bake_stage, ++baked_count, L.images.size());
     }
     out.t_bake += t0.seconds();
 
@@ -959,9 +963,12 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
     }
     t_score += t0.seconds();
   }
-  auto score = [&](const io::GltfFile& f) {
+  // Scores a layout as written over eval's views: a stage of its own on the progress display.
+  auto score = [&](const io::GltfFile& f, const std::string& name) {
     Stopwatch t0;
+    if (progress) progress("score (" + name + ")", 0, 1);
     const eval::Scored scored = scorer->score(f);
+    if (progress) progress("score (" + name + ")", 1, 1);
     t_score += t0.seconds();
     return scored;
   };
@@ -973,7 +980,7 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
   auto consider = [&](const Candidate& c) {
     io::GltfFile f = original;
     Realized r = realize(asset, layouts, prepared, layout_base, f, engine, o, c, progress, warnings);
-    if (scorer && r.overlaps_new == 0) r.q = score(f).q;
+    if (scorer && r.overlaps_new == 0) r.q = score(f, r.name).q;
     candidates.push_back({{"name", r.name},
                           {"cost_ratio", r.old_texels > 0 ? r.new_texels / r.old_texels : 1.0},
                           {"q", r.q >= 0 ? json(r.q) : json(nullptr)},
@@ -1018,7 +1025,9 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
       at.cost = c, at.size = 0;
       io::GltfFile f = original;
       realize(asset, layouts, prepared, layout_base, f, engine, at, chosen_plan, {}, ignored);
-      const auto scored = score(f);
+      char name[64];
+      std::snprintf(name, sizeof name, "curve at c_r %.2f", c);
+      const auto scored = score(f, name);
       curve.push_back({{"c_r", scored.c_r}, {"q", scored.q}});
     }
     report["curve"] = curve;
@@ -1045,7 +1054,7 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
     io::GltfFile resized = original;
     resize_images(resized, sizes);
     t_score += t0.seconds();  // the resize; score() counts itself
-    const double q_resize = score(resized).q;
+    const double q_resize = score(resized, "the plain resize").q;
     guard = {{"q_reparam", chosen.q}, {"q_resize", q_resize}, {"resize", "lanczos3-srgb"}};
     // A layout that was not scored (q < 0) never wins against one that was.
     if (!(chosen.q >= 0 && chosen.q < q_resize)) {

@@ -2,6 +2,7 @@
 // texels and evaluates input vs reparam vs the isometric layout over 20 views, with an
 // HTML report: the whole product on an asset every machine has.
 #include "cli.h"
+#include "progress.h"
 
 #include "eval/eval.h"
 #include "io/gltf_io.h"
@@ -45,9 +46,10 @@ void add_demo(CLI::App& app, Globals& g) {
       eo.resolution = view->resolution, eo.filter = view->filter;
       eo.flatten = true;
       options.curve_costs = eo.cost_grid;  // reparam's own curve, as written, for the verdict
-      const bool tty = isatty(2);
-      auto progress = [tty](const std::string& stage, size_t done, size_t total) {
-        if (tty) std::fprintf(stderr, "\r%s: %zu/%zu   %s", stage.c_str(), done, total, done == total ? "\n" : "");
+      ProgressDisplay display(g.verbose);
+      auto progress = [&display](const std::string& stage, size_t done, size_t total) {
+        if (stage == "done") display.finish();  // eval's last call
+        else display(stage, done, total);
       };
       io::GltfFile reparamed;  // reparam's layout, even when the guard writes the resize
       auto report = pipeline::reparam(file, *engine, options, progress, &reparamed);

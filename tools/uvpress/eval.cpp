@@ -4,6 +4,7 @@
 // reference's layout (resized as users do), each other glTF of the same mesh (and as
 // written), and the isometric (flatten) layout; see host/eval/eval.h.
 #include "cli.h"
+#include "progress.h"
 
 #include "core/error.h"
 #include "eval/eval.h"
@@ -131,12 +132,13 @@ void add_eval(CLI::App& app, Globals& g) {
       o.artifacts = !a->html.empty();
       o.codec = a->codec;
       if (o.codec && a->codec_quality) o.codec->quality = *a->codec_quality;
-      const bool tty = isatty(2);
       eval::EvalArtifacts art;
+      ProgressDisplay display(g.verbose);
       auto report = eval::evaluate(ref, others, *engine, o, &art, [&](const std::string& stage, size_t done, size_t total) {
-        if (tty) std::fprintf(stderr, "\r%-40s %zu/%zu", stage.c_str(), done, total);
-        if (tty && stage == "done") std::fprintf(stderr, "\n");
+        if (stage == "done") display.finish();  // eval's last call
+        else display(stage, done, total);
       });
+      display.finish();
       g.stage("evaluate", t0);
       if (!a->html.empty()) eval::write_html_report(report, art, a->html);
       g.write_report(report);

@@ -1,6 +1,7 @@
 // uvpress reparam <in> -o <out>: new UVs under which a smaller texture looks as good on
 // screen (perceptual loss, GMSD), every texture re-baked into them, a valid glTF written.
 #include "cli.h"
+#include "progress.h"
 
 #include "core/error.h"
 #include "io/asset_bytes.h"
@@ -14,40 +15,6 @@
 #include <unistd.h>
 
 namespace uvpress::cli {
-
-namespace {
-
-// A one-line progress display on stderr when it is a terminal; quiet otherwise.
-class ProgressLine {
- public:
-  explicit ProgressLine(bool verbose) : tty_(isatty(2)), verbose_(verbose) {}
-  ~ProgressLine() { finish(); }
-  void operator()(const std::string& stage, size_t done, size_t total) {
-    auto now = std::chrono::steady_clock::now();
-    if (stage != stage_) {
-      finish();
-      stage_ = stage;
-    } else if (now - last_ < std::chrono::milliseconds(200) && done < total) {
-      return;
-    }
-    last_ = now;
-    if (tty_) std::fprintf(stderr, "\r%s: %zu/%zu (%.0f%%)   ", stage.c_str(), done, total, total ? 100.0 * done / total : 100.0);
-    shown_ = tty_;
-  }
-  void finish() {
-    if (shown_) std::fputc('\n', stderr);
-    if (!shown_ && verbose_ && !stage_.empty()) std::fprintf(stderr, "%s: done\n", stage_.c_str());
-    shown_ = false;
-    stage_.clear();
-  }
-
- private:
-  bool tty_, verbose_, shown_ = false;
-  std::string stage_;
-  std::chrono::steady_clock::time_point last_{};
-};
-
-}  // namespace
 
 void add_reparam(CLI::App& app, Globals& g) {
   auto* cmd = app.add_subcommand("reparam", "Re-parameterize an asset so that smaller textures look as good (GMSD)");
@@ -104,7 +71,7 @@ void add_reparam(CLI::App& app, Globals& g) {
       auto engine = g.make_engine();
       pipeline::ReparamOptions options = *o;
       options.optimize = !*no_optimize;
-      ProgressLine progress(g.verbose);
+      ProgressDisplay progress(g.verbose);
       auto report = pipeline::reparam(file, *engine, options, std::ref(progress));
       progress.finish();
       std::string gpu_summary;
