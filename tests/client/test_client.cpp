@@ -145,7 +145,7 @@ TEST_CASE("client: the demo asset's reparam output renders in three.js as well a
 
 TEST_CASE("client: Duck's reparam output renders in three.js as well as a plain resize", "[client][shared][full]") {
   // At a 4-texel gutter the distant views bled through the coarse mip levels (p99 54 vs the
-  // resize's 20); the mip-safe default (8 texels at Duck's 362^2, README "Gutters") passes on
+  // resize's 20); the mip-safe default (8 texels at Duck's 362^2, docs/DEVELOPERS.md "Gutters") passes on
   // its repack layout (distant p99 19 vs 12). Minutes on 2 cores: it runs with the full set.
   if (!full_run()) UVPRESS_SKIP("Duck's real-client check runs with UVPRESS_CLIENT_FULL=1 (minutes on 2 cores)");
   auto duck = shared_asset("Duck/glTF/Duck.gltf");
