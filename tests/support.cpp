@@ -65,7 +65,8 @@ std::string slurp(const fs::path& p) {
   return std::string(std::istreambuf_iterator<char>(in), {});
 }
 
-// Runs a shell command with stdout and stderr captured in files.
+}  // namespace
+
 RunResult run_shell(const std::string& command) {
   Scratch io("run");
   std::string full = command + " >" + (io / "out").string() + " 2>" + (io / "err").string() + " </dev/null";
@@ -76,8 +77,6 @@ RunResult run_shell(const std::string& command) {
   r.err = slurp(io / "err");
   return r;
 }
-
-}  // namespace
 
 RunResult run_uvpress(const std::string& args) { return run_shell(std::string(UVPRESS_BINARY) + " " + args); }
 

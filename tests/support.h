@@ -42,6 +42,8 @@ struct RunResult {
 
 // Runs the uvpress binary with `args` (shell words, already quoted as needed).
 RunResult run_uvpress(const std::string& args);
+// Runs a shell command (sh -c) with stdout and stderr captured.
+RunResult run_shell(const std::string& command);
 
 // Runs uvpress with `args` and checks the bad-input contract: exit 1, exactly one stderr
 // line naming `file` and containing `reason`, nothing on stdout, `dir` unchanged (no

@@ -27,4 +27,16 @@ AssetBytes asset_bytes(const std::string& path, const RefPolicy& refs) {
   return out;
 }
 
+AssetBytes staged_asset_bytes(const AtomicWriter& writer, const std::string& path) {
+  AssetBytes out;
+  for (const auto& [target, size] : writer.staged()) {
+    const std::string ext = extension_of(target);
+    if (target == path) out.file += size;
+    else if (ext == ".bin") out.buffers += size;
+    else if (ext == ".ktx2") out.ktx2 += size;
+    else out.images += size;
+  }
+  return out;
+}
+
 }  // namespace uvpress::io

@@ -3,6 +3,7 @@
 // reports count this, not the .gltf text alone (Fox.gltf is 44 KB of a 187 KB asset).
 #pragma once
 
+#include "io/atomic_file.h"
 #include "io/references.h"
 
 #include <cstdint>
@@ -23,5 +24,8 @@ struct AssetBytes {
 // Throws InputError as the loader would for a reference that is refused or missing (a KTX2
 // copy that is missing or refused counts 0: the asset is whole without it).
 AssetBytes asset_bytes(const std::string& path, const RefPolicy& refs = {});
+// The same for an asset staged in `writer` (save_gltf's staged form) and not yet committed:
+// `path` itself, `.bin` buffers, `.ktx2` copies and the rest images.
+AssetBytes staged_asset_bytes(const AtomicWriter& writer, const std::string& path);
 
 }  // namespace uvpress::io

@@ -25,7 +25,7 @@ void AtomicWriter::add(const std::string& path, const void* bytes, size_t size) 
   std::string temp = (dir / ("." + target.filename().string() + ".tmp-XXXXXX")).string();
   int fd = mkstemp(temp.data());
   if (fd < 0) throw InputError(path, std::string("cannot create a file here: ") + std::strerror(errno));
-  entries_.push_back({temp, path});
+  entries_.push_back({temp, path, uint64_t(size)});
   const char* p = static_cast<const char*>(bytes);
   while (size > 0) {
     ssize_t n = ::write(fd, p, size);
@@ -40,6 +40,12 @@ void AtomicWriter::add(const std::string& path, const void* bytes, size_t size) 
   // Data on disk before the rename makes it visible, so a crash never leaves a torn file.
   if (::fsync(fd) != 0 || ::close(fd) != 0) throw InputError(path, std::string("write failed: ") + std::strerror(errno));
   ::chmod(temp.c_str(), 0644);
+}
+
+std::vector<std::pair<std::string, uint64_t>> AtomicWriter::staged() const {
+  std::vector<std::pair<std::string, uint64_t>> out;
+  for (const auto& e : entries_) out.emplace_back(e.target, e.size);
+  return out;
 }
 
 void AtomicWriter::commit() {

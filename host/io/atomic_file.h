@@ -4,6 +4,7 @@
 
 #include <cstdint>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace uvpress::io {
@@ -22,9 +23,14 @@ class AtomicWriter {
   // Renames every temporary onto its target, in the order added (add the main file last).
   void commit();
 
+  // The files added and not yet committed: target path and size in bytes, in order (so
+  // that a report written with the asset can say what the asset will cost).
+  std::vector<std::pair<std::string, uint64_t>> staged() const;
+
  private:
   struct Entry {
     std::string temp, target;
+    uint64_t size = 0;
   };
   std::vector<Entry> entries_;
 };

@@ -286,7 +286,7 @@ std::string serialize(tinygltf::Model& m, bool binary) {
   return out.str();
 }
 
-void save_glb(const GltfFile& file, const std::string& path) {
+void save_glb(const GltfFile& file, const std::string& path, AtomicWriter& writer) {
   tinygltf::Model m = file.model;
   // One buffer: the BIN chunk. Every old buffer is appended at a 16-byte aligned offset.
   tinygltf::Buffer merged;
@@ -326,7 +326,6 @@ void save_glb(const GltfFile& file, const std::string& path) {
     merged.data.resize(align(merged.data.size(), 4));
     m.buffers.push_back(std::move(merged));
   }
-  AtomicWriter writer;
   std::set<std::string> used;
   write_ktx2_sidecars(file, m, fs::path(path).parent_path(), fs::path(path).stem().string(), writer,
                       [&](std::string name) {
@@ -338,7 +337,6 @@ void save_glb(const GltfFile& file, const std::string& path) {
                         return candidate;
                       });
   writer.add(path, serialize(m, true));
-  writer.commit();
 }
 
 // True when `path` is a regular file holding exactly `bytes`.
@@ -351,12 +349,11 @@ bool holds_bytes(const fs::path& path, const std::vector<uint8_t>& bytes) {
                                                                           [](char a, uint8_t b) { return uint8_t(a) == b; });
 }
 
-void save_text_gltf(const GltfFile& file, const std::string& path, const SaveOptions& options) {
+void save_text_gltf(const GltfFile& file, const std::string& path, const SaveOptions& options, AtomicWriter& writer) {
   tinygltf::Model m = file.model;
   fs::path target(path);
   const std::string stem = target.stem().string();
   const fs::path dir = target.parent_path();
-  AtomicWriter writer;
   std::set<std::string> used;
   auto unique = [&](std::string name) {
     name = safe_name(name);
@@ -408,15 +405,20 @@ void save_text_gltf(const GltfFile& file, const std::string& path, const SaveOpt
     json["buffers"][b]["byteLength"] = lengths[b];
   }
   writer.add(path, json.dump(2) + "\n");
-  writer.commit();
 }
 
 }  // namespace
 
 void save_gltf(const GltfFile& file, const std::string& path, const SaveOptions& options) {
+  AtomicWriter writer;
+  save_gltf(file, path, options, writer);
+  writer.commit();
+}
+
+void save_gltf(const GltfFile& file, const std::string& path, const SaveOptions& options, AtomicWriter& writer) {
   std::string ext = extension_of(path);
-  if (ext == ".glb") return save_glb(file, path);
-  if (ext == ".gltf") return save_text_gltf(file, path, options);
+  if (ext == ".glb") return save_glb(file, path, writer);
+  if (ext == ".gltf") return save_text_gltf(file, path, options, writer);
   throw InputError(path, "unsupported output format '" + ext + "' (use .gltf or .glb)");
 }
 

@@ -3,6 +3,7 @@
 // is kept whole, images stay in their encoded form (no re-encoding of untouched textures).
 #pragma once
 
+#include "io/atomic_file.h"
 #include "io/references.h"
 
 #include <tiny_gltf.h>
@@ -62,6 +63,9 @@ struct SaveOptions {
 // files are written to temporaries and renamed at the end: no partial output. Throws
 // InputError.
 void save_gltf(const GltfFile& file, const std::string& path, const SaveOptions& options = {});
+// The same, staged in `writer` and not committed: the caller adds what must appear with the
+// asset (its report) and commits them together, so that a failed report leaves no asset.
+void save_gltf(const GltfFile& file, const std::string& path, const SaveOptions& options, AtomicWriter& writer);
 
 // True for the output extensions save_gltf takes.
 bool is_gltf_output_path(const std::string& path);

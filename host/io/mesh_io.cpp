@@ -197,6 +197,12 @@ Mesh read_mesh(const std::string& path, ObjExtras* extras) {
 }
 
 void write_obj(const Mesh& m, const std::string& path, const ObjExtras* extras) {
+  AtomicWriter writer;
+  write_obj(m, path, extras, writer);
+  writer.commit();
+}
+
+void write_obj(const Mesh& m, const std::string& path, const ObjExtras* extras, AtomicWriter& writer) {
   std::string out = "# written by uvpress\n";
   char buf[128];
   const bool normals = extras && extras->normal_triangles.size() == m.triangles.size() && !m.triangles.empty();
@@ -240,9 +246,7 @@ void write_obj(const Mesh& m, const std::string& path, const ObjExtras* extras) 
     }
     out += buf;
   }
-  AtomicWriter writer;
   writer.add(path, out);
-  writer.commit();
 }
 
 }  // namespace uvpress::io

@@ -2,6 +2,7 @@
 #pragma once
 
 #include "core/mesh.h"
+#include "io/atomic_file.h"
 
 #include <string>
 #include <utility>
@@ -28,5 +29,7 @@ Mesh read_off(const std::string& path);
 // OBJ with `vt` when the mesh has UVs, and what `extras` holds (mtllib, usemtl, vn for the
 // same triangles); written atomically.
 void write_obj(const Mesh& mesh, const std::string& path, const ObjExtras* extras = nullptr);
+// The same, staged in `writer` (committed by the caller with what must appear with it).
+void write_obj(const Mesh& mesh, const std::string& path, const ObjExtras* extras, AtomicWriter& writer);
 
 }  // namespace uvpress::io

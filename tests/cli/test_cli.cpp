@@ -288,6 +288,31 @@ TEST_CASE("CLI: copy keeps image file names unless that would overwrite other by
   CHECK(test::validate_gltf(dir / "out" / "b.gltf")["numErrors"] == 0);
 }
 
+TEST_CASE("CLI: the asset and its report appear together: a report that cannot be written leaves no asset", "[cli]") {
+  test::Scratch dir("cli-report-with-asset");
+  io::save_gltf(pipeline::make_demo_asset({4, 16}), (dir / "in.glb").string());
+  test::fs::create_directories(dir / "out");
+  const std::string args = "reparam " + quoted(dir / "in.glb") + " -o " + quoted(dir / "out" / "r.glb") +
+                           " --evaluations 12 --view-size 16 --score-resolution 64 --report " + quoted(dir / "out" / "r.json");
+  auto full = run_uvpress(args);
+  INFO(full.err);
+  REQUIRE(full.exit_code == 0);
+  // A file-size limit (ulimit -f; sh counts 512-byte blocks) between the asset's size and its report's:
+  // writing the report fails after the output probe and after the asset was written.
+  // Before, the asset stayed behind, with no report.
+  const uint64_t asset = fs::file_size(dir / "out" / "r.glb"), report = fs::file_size(dir / "out" / "r.json");
+  INFO("asset " << asset << " B, report " << report << " B");
+  const uint64_t blocks = asset / 512 + 2;
+  REQUIRE(blocks * 512 < report);
+  fs::remove(dir / "out" / "r.glb"), fs::remove(dir / "out" / "r.json");
+  auto r = test::run_shell("ulimit -f " + std::to_string(blocks) + "; " + UVPRESS_BINARY + " " + args);
+  INFO(r.err);
+  CHECK(r.exit_code == 1);
+  REQUIRE(r.err_lines().size() == 1);
+  CHECK_THAT(r.err_lines()[0], Catch::Contains("r.json") && Catch::Contains("write failed"));
+  CHECK(fs::is_empty(dir / "out"));  // no asset, no report, no temporaries
+}
+
 TEST_CASE("CLI: output folders are created, an unwritable output fails before the work and leaves nothing", "[cli]") {
   test::Scratch dir("cli-outputs");
   const auto good = quoted(dir / "good.glb");

@@ -36,6 +36,9 @@ struct Globals {
   void prepare_outputs(const std::vector<std::string>& files, const std::vector<std::string>& folders = {}) const;
   // Writes `report` atomically when --report was given.
   void write_report(const nlohmann::ordered_json& report) const;
+  // Staged with the asset in `writer` (committed by the caller with it): a report that
+  // cannot be written leaves no asset.
+  void write_report(const nlohmann::ordered_json& report, io::AtomicWriter& writer) const;
   // "-v" stage timing: prints "stage: 12.3 ms" (the time since `since`) on stderr and
   // restarts `since` for the next stage.
   void stage(const char* name, std::chrono::steady_clock::time_point& since) const;

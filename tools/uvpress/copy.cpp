@@ -31,19 +31,24 @@ void add_copy(CLI::App& app, Globals& g) {
       g.stage("load", t0);
       std::string gpu_summary;
       const auto gpu_textures = attach_gpu_textures(file, *gpu, &gpu_summary);
-      io::save_gltf(file, *output, {/*keep_image_names=*/true});
-      g.stage("save", t0);
       // The whole asset (JSON, buffers, images) before and after; images are carried byte
-      // for byte, so their costs are the same on both sides.
-      const uint64_t in = io::asset_bytes(*input, g.refs()).total(), out = io::asset_bytes(*output).total();
+      // for byte, so their costs are the same on both sides. Measured before anything is
+      // written (the output may replace the input).
+      const uint64_t in = io::asset_bytes(*input, g.refs()).total();
+      // The asset and its report appear together: a report that cannot be written leaves no asset.
+      io::AtomicWriter writer;
+      io::save_gltf(file, *output, {/*keep_image_names=*/true}, writer);
+      const uint64_t out = io::staged_asset_bytes(writer, *output).total();
       const auto costs = pipeline::image_costs(file);
-      std::printf("%s (%s) -> %s (%s), textures %s, VRAM (BC7, mips) %s%s\n", input->c_str(), human_bytes(in).c_str(),
-                  output->c_str(), human_bytes(out).c_str(), human_bytes(costs["totals"]["bytes"].get<uint64_t>()).c_str(),
-                  human_bytes(costs["totals"]["vram_bc7_mips"].get<uint64_t>()).c_str(), gpu_summary.c_str());
       nlohmann::ordered_json report = {{"input", *input}, {"output", *output}, {"input_bytes", in}, {"output_bytes", out},
                                        {"textures", costs["textures"]}, {"texture_totals", costs["totals"]}};
       if (!gpu_textures.is_null()) report["gpu_textures"] = gpu_textures;
-      g.write_report(report);
+      g.write_report(report, writer);
+      writer.commit();
+      g.stage("save", t0);
+      std::printf("%s (%s) -> %s (%s), textures %s, VRAM (BC7, mips) %s%s\n", input->c_str(), human_bytes(in).c_str(),
+                  output->c_str(), human_bytes(out).c_str(), human_bytes(costs["totals"]["bytes"].get<uint64_t>()).c_str(),
+                  human_bytes(costs["totals"]["vram_bc7_mips"].get<uint64_t>()).c_str(), gpu_summary.c_str());
       return 0;
     };
   });

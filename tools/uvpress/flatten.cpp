@@ -98,7 +98,8 @@ PrimitiveCharts split_primitive(const io::Primitive& prim) {
   return pc;
 }
 
-void flatten_gltf(const Globals& g, const std::string& input, const std::string& output, const flatten::Options& o,
+void flatten_gltf(const Globals& g, const std::string& input, const std::string& output, io::AtomicWriter& writer,
+                  const flatten::Options& o,
                   std::vector<Chart>& charts, std::vector<std::string>& uv_sets, size_t& overlaps_new,
                   std::chrono::steady_clock::time_point& t0) {
   io::GltfFile file = io::load_gltf(input, g.refs());
@@ -285,13 +286,14 @@ void flatten_gltf(const Globals& g, const std::string& input, const std::string&
     if (overlaps_new)
       throw InputError(output, std::to_string(overlaps_new) + " pairs of triangles overlap in the new UVs; nothing written");
   }
-  io::save_gltf(file, output, {/*keep_image_names=*/true});
+  io::save_gltf(file, output, {/*keep_image_names=*/true}, writer);
   g.stage("save", t0);
 }
 
 // An OBJ keeps its materials (mtllib, usemtl) and normals (vn); `note` says what the
 // rewrite changed besides: the input's own UVs replaced, group lines not kept.
-void flatten_mesh(const Globals& g, const std::string& input, const std::string& output, const flatten::Options& o,
+void flatten_mesh(const Globals& g, const std::string& input, const std::string& output, io::AtomicWriter& writer,
+                  const flatten::Options& o,
                   std::vector<Chart>& charts, std::chrono::steady_clock::time_point& t0, std::string& note) {
   Chart chart;
   io::ObjExtras extras;
@@ -309,7 +311,7 @@ void flatten_mesh(const Globals& g, const std::string& input, const std::string&
   chart.result.flips = flatten::count_flips(out.triangles, out.uvs);
   if (chart.result.flips)
     throw InputError(output, std::to_string(chart.result.flips) + " flipped triangles in the UVs; nothing written");
-  io::write_obj(out, output, &extras);
+  io::write_obj(out, output, &extras, writer);
   g.stage("save", t0);
   charts.push_back(std::move(chart));
 }
@@ -373,15 +375,16 @@ void add_flatten(CLI::App& app, Globals& g) {
       std::vector<std::string> uv_sets;  // glTF: the TEXCOORD sets written
       size_t overlaps_new = 0;           // glTF: always 0 when written
       std::string mesh_note;             // OBJ/OFF: what the rewrite changed besides the UVs
-      if (gltf_in) flatten_gltf(g, a->input, a->output, o, charts, uv_sets, overlaps_new, t0);
-      else flatten_mesh(g, a->input, a->output, o, charts, t0, mesh_note);
+      // The output and its report (and --log) appear together: one that cannot be written
+      // leaves none of them.
+      io::AtomicWriter writer;
+      if (gltf_in) flatten_gltf(g, a->input, a->output, writer, o, charts, uv_sets, overlaps_new, t0);
+      else flatten_mesh(g, a->input, a->output, writer, o, charts, t0, mesh_note);
 
       if (!a->log.empty()) {
         std::vector<flatten::LabelledLog> logs;
         for (const auto& c : charts) logs.push_back({c.label, &c.result.log});
-        io::AtomicWriter w;
-        w.add(a->log, log_ext == ".csv" ? flatten::log_csv(logs) : flatten::log_json(logs));
-        w.commit();
+        writer.add(a->log, log_ext == ".csv" ? flatten::log_csv(logs) : flatten::log_json(logs));
       }
 
       // One summary; a glTF's charts are summed (faces, iterations, time, flips), E_c is
@@ -454,11 +457,12 @@ void add_flatten(CLI::App& app, Globals& g) {
       std::string sets;
       for (const auto& s : uv_sets) sets += (sets.empty() ? "" : ", ") + s;
       if (!sets.empty()) sets = " (new UV set " + sets + ")";
+      g.write_report(report, writer);
+      writer.commit();
       std::printf("%s: %zu triangles%s, %s: %d iterations, %.3f s, %zu flips%s -> %s%s\n", a->input.c_str(), faces,
                   charts.size() > 1 ? (" in " + std::to_string(charts.size()) + " charts").c_str() : "", a->method.c_str(),
                   charts.size() == 1 ? iterations : most, seconds, flips, extra.c_str(), a->output.c_str(), sets.c_str());
       if (g.verbose) std::fprintf(stderr, "flatten: eta %d, E_c %.6f\n", eta, report["E_c"].get<double>());
-      g.write_report(report);
       return 0;
     };
   });

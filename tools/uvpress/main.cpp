@@ -6,6 +6,7 @@
 #include "core/error.h"
 #include "io/atomic_file.h"
 
+#include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <unistd.h>
@@ -34,13 +35,17 @@ void Globals::prepare_outputs(const std::vector<std::string>& files, const std::
 }
 
 void Globals::write_report(const nlohmann::ordered_json& report) const {
+  io::AtomicWriter writer;
+  write_report(report, writer);
+  writer.commit();
+}
+
+void Globals::write_report(const nlohmann::ordered_json& report, io::AtomicWriter& writer) const {
   if (report.empty() || this->report.empty()) return;
   nlohmann::ordered_json out = {{"schema", kReportSchema}};
   for (const auto& [key, value] : report.items())
     if (key != "schema") out[key] = value;
-  io::AtomicWriter writer;
   writer.add(this->report, out.dump(2) + "\n");
-  writer.commit();
 }
 
 void Globals::stage(const char* name, std::chrono::steady_clock::time_point& since) const {
@@ -69,6 +74,9 @@ int main(int argc, char** argv) {
     setenv("OMP_WAIT_POLICY", "passive", 1);
     execv("/proc/self/exe", argv);  // returns only on failure: carry on as we are
   }
+  // A file-size limit (ulimit -f, a quota) then fails the write with EFBIG, which the
+  // writers turn into one error line, instead of killing the process mid-output.
+  std::signal(SIGXFSZ, SIG_IGN);
   cli::Globals g;
   if (const char* env = std::getenv("UVPRESS_DEVICE"); env && *env) g.device = env;
   if (const char* env = std::getenv("UVPRESS_VALIDATION"); env && std::string(env) == "1") g.validation = true;

@@ -77,10 +77,13 @@ void add_reparam(CLI::App& app, Globals& g) {
       std::string gpu_summary;
       const auto gpu_textures = attach_gpu_textures(file, *gpu, &gpu_summary);
       if (!gpu_textures.is_null()) report["gpu_textures"] = gpu_textures;
-      io::save_gltf(file, *output, {/*keep_image_names=*/true});
+      // The asset and its report are staged together and appear together: a report that
+      // cannot be written leaves no asset (and an asset written in place is not replaced).
+      io::AtomicWriter writer;
+      io::save_gltf(file, *output, {/*keep_image_names=*/true}, writer);
       double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       // The whole asset before and after: JSON, buffers and images (or the .glb).
-      const io::AssetBytes out_files = io::asset_bytes(*output);
+      const io::AssetBytes out_files = io::staged_asset_bytes(writer, *output);
       const uint64_t in_bytes = in_files.total(), out_bytes = out_files.total();
       for (const auto& w : report["warnings"]) std::fprintf(stderr, "uvpress: %s: warning: %s\n", input->c_str(), w.get<std::string>().c_str());
       // Every image of the asset, re-baked or not.
@@ -128,12 +131,6 @@ void add_reparam(CLI::App& app, Globals& g) {
                                    human_bytes(new_costs["bytes"].get<uint64_t>()) + ", VRAM (BC7, mips) " +
                                    human_bytes(old_costs["vram_bc7_mips"].get<uint64_t>()) + " -> " +
                                    human_bytes(new_costs["vram_bc7_mips"].get<uint64_t>());
-      std::printf("%s (%s, %llu texels) -> %s (%s, %llu texels)%s%s, cost ratio %.3f%s%s%s, %.1f s\n", input->c_str(),
-                  human_bytes(in_bytes).c_str(), (unsigned long long)old_t, output->c_str(), human_bytes(out_bytes).c_str(),
-                  (unsigned long long)new_t, textures.c_str(), gpu_summary.c_str(), report["cost_ratio"].get<double>(), capped.c_str(),
-                  infeasible.c_str(), verdict.c_str(), seconds);
-      if (g.verbose)
-        for (auto& [stage, s] : report["stages"].items()) std::fprintf(stderr, "%s: %.2f s\n", stage.c_str(), s.get<double>());
       nlohmann::ordered_json out = {{"input", *input}, {"output", *output}, {"device", report["device"]},
                                     {"backend", report["backend"]}, {"seconds", seconds}, {"input_bytes", in_bytes},
                                     {"output_bytes", out_bytes},
@@ -142,7 +139,14 @@ void add_reparam(CLI::App& app, Globals& g) {
       for (auto& [key, value] : report.items())
         if (!out.contains(key)) out[key] = value;
       out["seconds"] = seconds;
-      g.write_report(out);
+      g.write_report(out, writer);
+      writer.commit();
+      std::printf("%s (%s, %llu texels) -> %s (%s, %llu texels)%s%s, cost ratio %.3f%s%s%s, %.1f s\n", input->c_str(),
+                  human_bytes(in_bytes).c_str(), (unsigned long long)old_t, output->c_str(), human_bytes(out_bytes).c_str(),
+                  (unsigned long long)new_t, textures.c_str(), gpu_summary.c_str(), report["cost_ratio"].get<double>(), capped.c_str(),
+                  infeasible.c_str(), verdict.c_str(), seconds);
+      if (g.verbose)
+        for (auto& [stage, s] : report["stages"].items()) std::fprintf(stderr, "%s: %.2f s\n", stage.c_str(), s.get<double>());
       return 0;
     };
   });
