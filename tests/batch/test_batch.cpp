@@ -320,7 +320,7 @@ TEST_CASE("batch: input hashes cover a .glb's external files, read by the loader
   CHECK(pipeline::hash_asset(outside, {true}) != allowed);
 }
 
-TEST_CASE("batch --texture-format astc: KTX2 copies beside each output, in its hash and report; resume redoes a lost copy",
+TEST_CASE("batch --texture-format astc: KTX2 copies beside each output, in its hash and report, resume redoes a lost copy",
           "[batch][cli][astc]") {
   test::Scratch dir("batch-astc");
   write_assets(dir.path(), 2, 6, 48);

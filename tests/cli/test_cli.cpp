@@ -215,7 +215,7 @@ TEST_CASE("CLI: reparam's summary line says when the density cap kept it under -
   CHECK_THAT(k.out, !Catch::Contains("capped"));
 }
 
-TEST_CASE("CLI: reparam's summary counts every image, says when nothing was re-parameterized and why; in place, the input's bytes are the old ones",
+TEST_CASE("CLI: reparam's summary counts every image, says when nothing was re-parameterized and why, in place, the input's bytes are the old ones",
           "[cli][reparam]") {
   test::Scratch dir("cli-reparam-untouched");
   // A texture sampled through KHR_texture_transform: its layout is left as it is.

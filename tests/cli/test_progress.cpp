@@ -37,7 +37,7 @@ TEST_CASE("progress: the time left scales the elapsed time by the work left", "[
   CHECK(ProgressDisplay::time_left(10, 100, 100).empty());  // nothing left
 }
 
-TEST_CASE("progress: plain lines only for a stage that runs, at intervals; -v says when each stage is done", "[cli][progress]") {
+TEST_CASE("progress: plain lines only for a stage that runs, at intervals, -v says when each stage is done", "[cli][progress]") {
   double now = 0;
   std::FILE* f = std::tmpfile();
   REQUIRE(f);

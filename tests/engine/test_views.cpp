@@ -208,7 +208,7 @@ TEST_CASE("Views: the bake equals a dense double normal-equations solve", "[engi
   CHECK(vk->validation_errors() == 0);
 }
 
-TEST_CASE("Views: identity reproduces the reference; shrinking costs more on detail; 90 degree symmetry", "[engine][views]") {
+TEST_CASE("Views: identity reproduces the reference, shrinking costs more on detail, 90 degree symmetry", "[engine][views]") {
   const uint32_t tw = 128, th = 128, size = 64;
   auto tex = test_texture(tw, th);
   // Triangles about 10 texels across: magnified about 6x in their 64 px views.

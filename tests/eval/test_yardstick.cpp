@@ -111,7 +111,7 @@ TEST_CASE("render_mesh trilinear: the level of detail is log2 of the texel footp
   CHECK(checked > 100);
 }
 
-TEST_CASE("render_mesh trilinear: single-texel detail minified averages out; bilinear aliases", "[eval][engine]") {
+TEST_CASE("render_mesh trilinear: single-texel detail minified averages out, bilinear aliases", "[eval][engine]") {
   auto cpu = engine::make_cpu_engine({});
   const Square sq;
   // A 1-texel checkerboard (mean 0.5), 2.5 texels a pixel.
@@ -176,7 +176,7 @@ TEST_CASE("render_mesh: Vulkan (lavapipe, validation on) matches the CPU oracle 
   CHECK(vk->validation_errors() == 0);
 }
 
-TEST_CASE("render_mesh: a view rendered as 2 x 2 tiles is the whole view; triangles past the guard band are clipped",
+TEST_CASE("render_mesh: a view rendered as 2 x 2 tiles is the whole view, triangles past the guard band are clipped",
           "[eval][engine]") {
   auto cpu = engine::make_cpu_engine({});
   io::GltfFile file = pipeline::make_demo_asset({2, 128});  // 8 large triangles: most cross tile borders

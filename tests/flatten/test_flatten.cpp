@@ -131,7 +131,7 @@ TEST_CASE("flatten: energy gradient matches central finite differences", "[flatt
   }
 }
 
-TEST_CASE("flatten: CM proxy is the exact Hessian where dh/ds1 >= 0, PSD always; SLIM proxy gradient = grad D",
+TEST_CASE("flatten: CM proxy is the exact Hessian where dh/ds1 >= 0, PSD always, SLIM proxy gradient = grad D",
           "[flatten]") {
   for (uint32_t k = 0; k < 100; ++k) {
     double J[4];
@@ -339,7 +339,7 @@ TEST_CASE("flatten: lilium - progressive and slim reach the same E_c within 0.1%
   CHECK(slim.flips == 0);
 }
 
-TEST_CASE("flatten: camelhead - progressive reaches eta in fewer iterations than slim and cm; floors", "[flatten][shared]") {
+TEST_CASE("flatten: camelhead - progressive reaches eta in fewer iterations than slim and cm, floors", "[flatten][shared]") {
   auto m = shared_mesh("camelhead.off");
   if (!m) UVPRESS_SKIP("../shared/meshes/camelhead.off is absent");
   Options o;

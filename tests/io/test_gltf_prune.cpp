@@ -20,7 +20,7 @@ int unused_objects(const nlohmann::json& validation) { return validation["codes"
 
 }  // namespace
 
-TEST_CASE("prune: a replaced UV accessor, its bufferView and replaced image bytes go; the input's own unused accessor stays",
+TEST_CASE("prune: a replaced UV accessor, its bufferView and replaced image bytes go, the input's own unused accessor stays",
           "[io][prune]") {
   test::Scratch dir("prune");
   // The demo asset with one accessor nothing references (the input's, not ours to drop),

@@ -98,7 +98,7 @@ float max_abs_diff(const Image& a, const Image& b) {
 
 }  // namespace
 
-TEST_CASE("KTX2 ASTC: ktx-parse reads header, descriptor and level index; astcenc decodes the payload within its own error",
+TEST_CASE("KTX2 ASTC: ktx-parse reads header, descriptor and level index, astcenc decodes the payload within its own error",
           "[io][ktx2]") {
   if (!have("astcenc")) FAIL("the astcenc command is missing (run tools/install-deps.sh)");
   test::Scratch dir("ktx2-astc");
