@@ -121,8 +121,16 @@ void add_lit_inputs(const io::GltfFile& file, const io::Asset& asset, const std:
         if (new_map) {
           MaterialMap map;
           map.image = img.index, map.kind = kind;
-          Image decoded = io::decode_image(file.image_bytes.at(size_t(img.index)),
-                                           file.path + " image " + std::to_string(img.index));
+          Image decoded;
+          try {
+            decoded = io::decode_image(file.image_bytes.at(size_t(img.index)),
+                                       file.path + " image " + std::to_string(img.index));
+          } catch (const InputError& e) {
+            // A map the unlit q never read: no reason to fail what used to work; the caller
+            // says why lighting is off (or fails when lit was asked for).
+            if (m.lit_problem.empty()) m.lit_problem = slot + ": " + e.what();
+            decoded.width = decoded.height = 1, decoded.channels = 3, decoded.pixels = {0.5f, 0.5f, 1.0f};
+          }
           if (kind == atlas::RebakeRole::Normal && decoded.channels < 3 && m.lit_problem.empty())
             m.lit_problem = slot + ": image " + std::to_string(img.index) + " has " + std::to_string(decoded.channels) +
                             " channel(s), a normal map needs RGB";

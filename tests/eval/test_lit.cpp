@@ -195,7 +195,8 @@ TEST_CASE("assets without a normal map keep bit-identical figures under --shadin
   CHECK(lit["layouts"][0]["curve"][0]["q_lit"].get<double>() > 0);
 }
 
-TEST_CASE("lit shading: a normal map on another UV set falls back to unlit under auto, fails under lit", "[eval][lit]") {
+TEST_CASE("lit shading: a normal map on another UV set or that does not decode falls back to unlit under auto, fails under lit",
+          "[eval][lit]") {
   auto engine = engine::make_cpu_engine({});
   io::GltfFile asset = bumpy_sheet(true, 32, 4);
   asset.model.materials[0].normalTexture.texCoord = 1;
@@ -212,6 +213,17 @@ TEST_CASE("lit shading: a normal map on another UV set falls back to unlit under
   CHECK(r["shading_warning"].get<std::string>().find("TEXCOORD_1") != std::string::npos);
   o.shading = eval::Shading::Lit;
   CHECK_THROWS_WITH(eval::evaluate(asset, {}, *engine, o), Catch::Contains("cannot evaluate lit"));
+
+  // A normal map that does not decode: the same (the unlit q never read it).
+  io::GltfFile broken = bumpy_sheet(true, 32, 4);
+  broken.image_bytes[1] = {0x89, 'P', 'N', 'G', 0, 1, 2, 3};
+  o.shading = eval::Shading::Auto;
+  const auto b = eval::evaluate(broken, {}, *engine, o);
+  CHECK(b["shading"] == "unlit");
+  REQUIRE(b.contains("shading_warning"));
+  CHECK(b["shading_warning"].get<std::string>().find("normalTexture") != std::string::npos);
+  o.shading = eval::Shading::Lit;
+  CHECK_THROWS_WITH(eval::evaluate(broken, {}, *engine, o), Catch::Contains("cannot evaluate lit"));
 }
 
 TEST_CASE("lit_luminance: barycentrics, interpolated normals and the tangent frame against a double reference",
