@@ -16,6 +16,7 @@
 #include <Eigen/Dense>
 
 #include <chrono>
+#include <fstream>
 #include <cmath>
 
 using namespace uvpress;
@@ -396,4 +397,29 @@ TEST_CASE("lit q: Vulkan (lavapipe) renders agree with the CPU oracle", "[eval][
   // (coverage is integer rasterization, the same on both).
   CHECK(std::abs(qa - qb) < 1e-3 * qa);
   CHECK(vk->validation_errors() == 0);
+}
+
+TEST_CASE("uvpress eval --shading: lit by default on a normal-mapped asset, unlit on request, bad values are usage errors",
+          "[eval][lit][cli]") {
+  test::Scratch dir("eval-lit");
+  io::save_gltf(bumpy_sheet(true, 64, 8), (dir / "bumpy.glb").string());
+  const std::string common = " --cost-grid 0.5,1 --resolution 128 --device cpu --report ";
+  auto r = test::run_uvpress("eval '" + (dir / "bumpy.glb").string() + "'" + common + "'" + (dir / "a.json").string() + "'");
+  REQUIRE(r.exit_code == 0);
+  CHECK(r.out.find(", lit)") != std::string::npos);
+  std::ifstream in((dir / "a.json").string());
+  const auto report = nlohmann::json::parse(in);
+  CHECK(report["shading"] == "lit");
+  CHECK(report["layouts"][0]["curve"][0].contains("q_unlit"));
+  CHECK(report["layouts"][0]["curve"][0]["q"] == report["layouts"][0]["curve"][0]["q_lit"]);
+  r = test::run_uvpress("eval '" + (dir / "bumpy.glb").string() + "' --shading unlit" + common + "'" +
+                        (dir / "b.json").string() + "'");
+  REQUIRE(r.exit_code == 0);
+  std::ifstream in_b((dir / "b.json").string());
+  CHECK(nlohmann::json::parse(in_b)["shading"] == "unlit");
+  r = test::run_uvpress("eval '" + (dir / "bumpy.glb").string() + "' --shading glossy");
+  CHECK(r.exit_code == 2);
+  r = test::run_uvpress("reparam '" + (dir / "bumpy.glb").string() + "' -o '" + (dir / "o.glb").string() +
+                        "' --score-shading glossy");
+  CHECK(r.exit_code == 2);
 }
