@@ -234,12 +234,14 @@ void lit_luminance(const LitSurface& s, const LightRig& rig, const std::array<fl
       }
       if (!smooth || !(length(N) > 1e-12)) N = ng;
       const V3 V = normalized(sub(eye, pos));
-      // Back faces are lit as their front (double-sided): the whole frame flips.
-      if (dot(ng, V) < 0) N = mul(N, -1), T = mul(T, -1);
       N = normalized(N);
       T = sub(T, mul(N, dot(N, T)));
       T = length(T) > 1e-12 ? normalized(T) : perpendicular(N);
-      const V3 B = mul(cross(N, T), w < 0 ? -1.0 : 1.0);
+      V3 B = mul(cross(N, T), w < 0 ? -1.0 : 1.0);
+      // Back faces are lit as their front (double-sided): the whole frame flips, as glTF's
+      // sample viewer does for !gl_FrontFacing (T, B and N; flipping N and T alone would
+      // keep cross(N, T) and mirror the normal map's y).
+      if (dot(ng, V) < 0) N = mul(N, -1), T = mul(T, -1), B = mul(B, -1);
       const LitMaterial& m = (*s.materials)[(*s.triangle_material)[t]];
       auto sample = [&](int map) { return map >= 0 ? maps[size_t(map)] + 3 * px : nullptr; };
       V3 n = N;

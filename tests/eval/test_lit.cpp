@@ -241,115 +241,121 @@ TEST_CASE("lit_luminance: barycentrics, interpolated normals and the tangent fra
     N.insert(N.end(), {float(n.x()), float(n.y()), float(n.z())});
   }
   const auto cams = eval::dodecahedron_cameras(P.data(), 4);
-  // The camera most in front of the plane (largest eye z over distance) that is not
-  // straight on (|x| > 0.3 of the distance).
-  std::array<float, 16> cam{};
-  double best = 0;
-  for (const auto& c : cams) {
-    const auto e = eval::camera_eye(c);
-    const double d = std::sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
-    if (std::abs(e[0]) > 0.3 * d && e[2] / d > best) cam = c, best = e[2] / d;
-  }
-  REQUIRE(best > 0.5);
-  Eigen::Matrix4d M;
-  for (int r = 0; r < 4; ++r)
-    for (int c = 0; c < 4; ++c) M(r, c) = cam[size_t(4 * r + c)];
-  const Eigen::Matrix4d Mi = M.inverse();
-  const Eigen::Vector4d eh = Mi * Eigen::Vector4d(0, 0, 1, 0);
-  const Eigen::Vector3d eye = eh.head<3>() / eh.w();
-  const auto e = eval::camera_eye(cam);
-  CHECK((eye - Eigen::Vector3d(e[0], e[1], e[2])).norm() < 1e-6 * eye.norm());
+  auto check_view = [&](bool back) {
+    // The camera most in front of (back: behind) the plane (largest eye z over distance)
+    // that is not straight on (|x| > 0.3 of the distance).
+    const double sgn = back ? -1.0 : 1.0;
+    std::array<float, 16> cam{};
+    double best = 0;
+    for (const auto& c : cams) {
+      const auto e = eval::camera_eye(c);
+      const double d = std::sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
+      if (std::abs(e[0]) > 0.3 * d && sgn * e[2] / d > best) cam = c, best = sgn * e[2] / d;
+    }
+    REQUIRE(best > 0.5);
+    Eigen::Matrix4d M;
+    for (int r = 0; r < 4; ++r)
+      for (int c = 0; c < 4; ++c) M(r, c) = cam[size_t(4 * r + c)];
+    const Eigen::Matrix4d Mi = M.inverse();
+    const Eigen::Vector4d eh = Mi * Eigen::Vector4d(0, 0, 1, 0);
+    const Eigen::Vector3d eye = eh.head<3>() / eh.w();
+    const auto e = eval::camera_eye(cam);
+    CHECK((eye - Eigen::Vector3d(e[0], e[1], e[2])).norm() < 1e-6 * eye.norm());
 
-  eval::LightRig rig;
-  rig.lights = {{{0.3, 0.2, 0.93}, kPi}};
-  const double l = std::sqrt(0.3 * 0.3 + 0.2 * 0.2 + 0.93 * 0.93);
-  for (double& x : rig.lights[0].direction) x /= l;
-  rig.ambient = 0;
-  std::vector<eval::LitMaterial> materials(1);
-  materials[0].base_color_factor = {0.5, 0.7, 0.9, 1};
-  materials[0].metallic_factor = 0.2, materials[0].roughness_factor = 0.5;
-  materials[0].normal_map = 0;
-  const std::vector<uint32_t> tri_material = {0, 0};
-  eval::LitSurface surface;
-  surface.positions = &P, surface.indices = &I, surface.normals = N;
-  surface.tangents = eval::vertex_tangents(P, UV, I, N);
-  surface.triangle_material = &tri_material, surface.materials = &materials;
-  // The derived tangent runs along +u = +x (in the plane), handedness +1 (v runs down y).
-  for (int v = 0; v < 4; ++v) {
-    CHECK(surface.tangents[4 * size_t(v)] > 0.9f);
-    CHECK(surface.tangents[4 * size_t(v) + 3] == 1.0f);
-  }
+    eval::LightRig rig;
+    rig.lights = {{{0.3, 0.2, 0.93 * sgn}, kPi}};  // on the camera's side
+    const double l = std::sqrt(0.3 * 0.3 + 0.2 * 0.2 + 0.93 * 0.93);
+    for (double& x : rig.lights[0].direction) x /= l;
+    rig.ambient = 0;
+    std::vector<eval::LitMaterial> materials(1);
+    materials[0].base_color_factor = {0.5, 0.7, 0.9, 1};
+    materials[0].metallic_factor = 0.2, materials[0].roughness_factor = 0.5;
+    materials[0].normal_map = 0;
+    const std::vector<uint32_t> tri_material = {0, 0};
+    eval::LitSurface surface;
+    surface.positions = &P, surface.indices = &I, surface.normals = N;
+    surface.tangents = eval::vertex_tangents(P, UV, I, N);
+    surface.triangle_material = &tri_material, surface.materials = &materials;
+    // The derived tangent runs along +u = +x (in the plane), handedness +1 (v runs down y).
+    for (int v = 0; v < 4; ++v) {
+      CHECK(surface.tangents[4 * size_t(v)] > 0.9f);
+      CHECK(surface.tangents[4 * size_t(v) + 3] == 1.0f);
+    }
 
-  const Eigen::Vector3d dpdu = Eigen::Vector3d(1, 0, 0.2).normalized();
-  auto vertex_tangent = [&](uint32_t v) {
-    const Eigen::Vector3d n(N[3 * v], N[3 * v + 1], N[3 * v + 2]);
-    return Eigen::Vector3d((dpdu - n * n.dot(dpdu)).normalized());
-  };
-  for (uint32_t v = 0; v < 4; ++v)
-    CHECK((vertex_tangent(v) - Eigen::Vector3d(surface.tangents[4 * v], surface.tangents[4 * v + 1], surface.tangents[4 * v + 2])).norm() < 1e-6);
+    const Eigen::Vector3d dpdu = Eigen::Vector3d(1, 0, 0.2).normalized();
+    auto vertex_tangent = [&](uint32_t v) {
+      const Eigen::Vector3d n(N[3 * v], N[3 * v + 1], N[3 * v + 2]);
+      return Eigen::Vector3d((dpdu - n * n.dot(dpdu)).normalized());
+    };
+    for (uint32_t v = 0; v < 4; ++v)
+      CHECK((vertex_tangent(v) - Eigen::Vector3d(surface.tangents[4 * v], surface.tangents[4 * v + 1], surface.tangents[4 * v + 2])).norm() < 1e-6);
 
-  constexpr uint32_t R = 64;
-  // A constant tilted tangent-space normal (+X: toward +u), as a map render would give it.
-  const Eigen::Vector3d nt = Eigen::Vector3d(0.3, -0.2, 1).normalized();
-  std::vector<float> map(size_t(R) * R * 3);
-  for (size_t p = 0; p < size_t(R) * R; ++p)
-    for (int c = 0; c < 3; ++c) map[3 * p + size_t(c)] = float(nt[c] * 0.5 + 0.5);
-  // Coverage and the reference from the exact ray-plane intersection (double).
-  std::vector<uint32_t> coverage(size_t(R) * R, engine::kNoMeshTriangle);
-  std::vector<double> expected(size_t(R) * R, 0.0);
-  size_t checked = 0;
-  for (uint32_t j = 0; j < R; ++j)
-    for (uint32_t i = 0; i < R; ++i) {
-      const double x = 2.0 * (i + 0.5) / R - 1, y = 1 - 2.0 * (j + 0.5) / R;
-      Eigen::Vector4d a = Mi * Eigen::Vector4d(x, y, -1, 1), b = Mi * Eigen::Vector4d(x, y, 1, 1);
-      const Eigen::Vector3d o = a.head<3>() / a.w(), d = b.head<3>() / b.w() - o;
-      // Plane z = 0.2 x: (o + s d).z - 0.2 (o + s d).x = 0.
-      const double s = -(o.z() - 0.2 * o.x()) / (d.z() - 0.2 * d.x());
-      const Eigen::Vector3d X = o + s * d;
-      for (uint32_t t = 0; t < 2; ++t) {
-        Eigen::Vector3d p[3];
-        for (int k = 0; k < 3; ++k) p[k] = Eigen::Vector3d(P[3 * I[3 * t + k]], P[3 * I[3 * t + k] + 1], P[3 * I[3 * t + k] + 2]);
-        const Eigen::Vector3d n = (p[1] - p[0]).cross(p[2] - p[0]);
-        double w[3];
-        for (int k = 0; k < 3; ++k) w[k] = (p[(k + 2) % 3] - p[(k + 1) % 3]).cross(X - p[(k + 1) % 3]).dot(n) / n.squaredNorm();
-        if (std::min({w[0], w[1], w[2]}) < 1e-3) continue;  // clear of edges only
-        coverage[size_t(j) * R + i] = t;
-        Eigen::Vector3d Nv(0, 0, 0);
-        for (int k = 0; k < 3; ++k) Nv += w[k] * Eigen::Vector3d(N[3 * I[3 * t + k]], N[3 * I[3 * t + k] + 1], N[3 * I[3 * t + k] + 2]);
-        Nv.normalize();
-        // The frame: each vertex's tangent dP/du made perpendicular to its normal,
-        // interpolated, made perpendicular to N; B = N x T (handedness +1).
-        Eigen::Vector3d T(0, 0, 0);
-        for (int k = 0; k < 3; ++k) T += w[k] * vertex_tangent(I[3 * t + k]);
-        T = (T - Nv * Nv.dot(T)).normalized();
-        const Eigen::Vector3d B = Nv.cross(T);
-        const Eigen::Vector3d n_world = (T * nt.x() + B * nt.y() + Nv * nt.z()).normalized();
-        const Eigen::Vector3d V = (eye - X).normalized();
-        const auto rgb = eval::shade(rig, {n_world.x(), n_world.y(), n_world.z()}, {V.x(), V.y(), V.z()}, {0.5, 0.7, 0.9},
-                                     1.0, 0.5, 0.2, {0, 0, 0});
-        double Y = 0;
-        const double weights[3] = {0.299, 0.587, 0.114};
-        for (int c = 0; c < 3; ++c) {
-          const double v = std::clamp(rgb[size_t(c)], 0.0, 1.0);
-          Y += weights[c] * (v <= 0.0031308 ? 12.92 * v : 1.055 * std::pow(v, 1 / 2.4) - 0.055);
+    constexpr uint32_t R = 64;
+    // A constant tilted tangent-space normal (+X: toward +u), as a map render would give it.
+    const Eigen::Vector3d nt = Eigen::Vector3d(0.3, -0.2, 1).normalized();
+    std::vector<float> map(size_t(R) * R * 3);
+    for (size_t p = 0; p < size_t(R) * R; ++p)
+      for (int c = 0; c < 3; ++c) map[3 * p + size_t(c)] = float(nt[c] * 0.5 + 0.5);
+    // Coverage and the reference from the exact ray-plane intersection (double).
+    std::vector<uint32_t> coverage(size_t(R) * R, engine::kNoMeshTriangle);
+    std::vector<double> expected(size_t(R) * R, 0.0);
+    size_t checked = 0;
+    for (uint32_t j = 0; j < R; ++j)
+      for (uint32_t i = 0; i < R; ++i) {
+        const double x = 2.0 * (i + 0.5) / R - 1, y = 1 - 2.0 * (j + 0.5) / R;
+        Eigen::Vector4d a = Mi * Eigen::Vector4d(x, y, -1, 1), b = Mi * Eigen::Vector4d(x, y, 1, 1);
+        const Eigen::Vector3d o = a.head<3>() / a.w(), d = b.head<3>() / b.w() - o;
+        // Plane z = 0.2 x: (o + s d).z - 0.2 (o + s d).x = 0.
+        const double s = -(o.z() - 0.2 * o.x()) / (d.z() - 0.2 * d.x());
+        const Eigen::Vector3d X = o + s * d;
+        for (uint32_t t = 0; t < 2; ++t) {
+          Eigen::Vector3d p[3];
+          for (int k = 0; k < 3; ++k) p[k] = Eigen::Vector3d(P[3 * I[3 * t + k]], P[3 * I[3 * t + k] + 1], P[3 * I[3 * t + k] + 2]);
+          const Eigen::Vector3d n = (p[1] - p[0]).cross(p[2] - p[0]);
+          double w[3];
+          for (int k = 0; k < 3; ++k) w[k] = (p[(k + 2) % 3] - p[(k + 1) % 3]).cross(X - p[(k + 1) % 3]).dot(n) / n.squaredNorm();
+          if (std::min({w[0], w[1], w[2]}) < 1e-3) continue;  // clear of edges only
+          coverage[size_t(j) * R + i] = t;
+          Eigen::Vector3d Nv(0, 0, 0);
+          for (int k = 0; k < 3; ++k) Nv += w[k] * Eigen::Vector3d(N[3 * I[3 * t + k]], N[3 * I[3 * t + k] + 1], N[3 * I[3 * t + k] + 2]);
+          Nv.normalize();
+          // The frame: each vertex's tangent dP/du made perpendicular to its normal,
+          // interpolated, made perpendicular to N; B = N x T (handedness +1).
+          Eigen::Vector3d T(0, 0, 0);
+          for (int k = 0; k < 3; ++k) T += w[k] * vertex_tangent(I[3 * t + k]);
+          T = (T - Nv * Nv.dot(T)).normalized();
+          const Eigen::Vector3d B = Nv.cross(T);
+          // A back face is lit as a front one: its whole frame flipped (glTF's doubleSided).
+          const Eigen::Vector3d n_world = sgn * (T * nt.x() + B * nt.y() + Nv * nt.z()).normalized();
+          const Eigen::Vector3d V = (eye - X).normalized();
+          const auto rgb = eval::shade(rig, {n_world.x(), n_world.y(), n_world.z()}, {V.x(), V.y(), V.z()}, {0.5, 0.7, 0.9},
+                                       1.0, 0.5, 0.2, {0, 0, 0});
+          double Y = 0;
+          const double weights[3] = {0.299, 0.587, 0.114};
+          for (int c = 0; c < 3; ++c) {
+            const double v = std::clamp(rgb[size_t(c)], 0.0, 1.0);
+            Y += weights[c] * (v <= 0.0031308 ? 12.92 * v : 1.055 * std::pow(v, 1 / 2.4) - 0.055);
+          }
+          expected[size_t(j) * R + i] = Y;
+          ++checked;
         }
-        expected[size_t(j) * R + i] = Y;
-        ++checked;
       }
+    REQUIRE(checked > R * R / 8);
+    std::vector<float> out(size_t(R) * R, -1.0f);
+    eval::lit_luminance(surface, rig, cam, R, R, coverage.data(), {map.data()}, out.data());
+    double worst = 0;
+    for (size_t p = 0; p < out.size(); ++p) {
+      if (coverage[p] == engine::kNoMeshTriangle) {
+        CHECK(out[p] == 0.0f);
+        continue;
+      }
+      worst = std::max(worst, std::abs(double(out[p]) - expected[p]));
     }
-  REQUIRE(checked > R * R / 8);
-  std::vector<float> out(size_t(R) * R, -1.0f);
-  eval::lit_luminance(surface, rig, cam, R, R, coverage.data(), {map.data()}, out.data());
-  double worst = 0;
-  for (size_t p = 0; p < out.size(); ++p) {
-    if (coverage[p] == engine::kNoMeshTriangle) {
-      CHECK(out[p] == 0.0f);
-      continue;
-    }
-    worst = std::max(worst, std::abs(double(out[p]) - expected[p]));
-  }
-  // fp32 vertex data, map samples and output: far inside one 8-bit level.
-  CHECK(worst < 2e-4);
+    // fp32 vertex data, map samples and output: far inside one 8-bit level.
+    CHECK(worst < 2e-4);
+  };
+  check_view(false);
+  check_view(true);
 
   // The BRDF itself at normal incidence, roughness 1, dielectric: D = 1/pi, V = 1/4, F = 0.04.
   eval::LightRig head_on;
