@@ -5,6 +5,7 @@
 #include "core/stopwatch.h"
 #include "cpu/gmsd.h"
 #include "layout.h"
+#include "lit.h"
 #include "perceptual/triangle_view.h"
 #include "resize.h"
 
@@ -16,6 +17,7 @@
 namespace uvpress::eval {
 
 using detail::LayoutMesh;
+using detail::MaterialMap;
 
 std::vector<std::array<float, 16>> dodecahedron_cameras(const float* p, size_t n, double fov_degrees) {
   double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
@@ -154,7 +156,7 @@ Savings pixel_ratio_at_equal_q(const nlohmann::ordered_json& a, const nlohmann::
 namespace {
 
 struct Timing {
-  double textures = 0, render = 0, gmsd = 0;
+  double textures = 0, render = 0, gmsd = 0, shading = 0;  // shading: lit views on the host
 };
 
 // A texture as the engine samples it: every level of its mip chain (one level when
@@ -168,13 +170,16 @@ struct Texture {
 // or with rgb its colour; with the trilinear filter the luminance of each level of the
 // chain an engine would build (mip_chain: box in linear light), as a viewer sees it.
 // With `codec`, each level is compressed and decoded again first (EvalOptions::codec).
-Texture view_texture(const Image& image, TextureFilter filter, bool rgb = false, const io::AstcOptions* codec = nullptr) {
+// colour = false: a data texture (lit shading's normal and ORM maps), its chain boxed and
+// its codec run on the stored values (astcenc's linear profile).
+Texture view_texture(const Image& image, TextureFilter filter, bool rgb = false, const io::AstcOptions* codec = nullptr,
+                     bool colour = true) {
   Texture t;
   t.width = image.width, t.height = image.height, t.channels = rgb ? 3 : 1;
   t.levels = filter == TextureFilter::Trilinear ? engine::mip_chain_levels(image.width, image.height) : 1;
   std::optional<io::AstcCodec> astc;
-  if (codec) astc.emplace(true, *codec);
-  for (Image level : mip_chain(image, t.levels)) {
+  if (codec) astc.emplace(colour, *codec);
+  for (Image level : mip_chain(image, t.levels, colour)) {
     if (astc) {
       const auto blocks = astc->compress(level);
       level = astc->decompress(blocks.data(), blocks.size(), level.width, level.height, level.channels);
@@ -199,12 +204,14 @@ constexpr size_t kChunkPixels = size_t(20) * 1024 * 1024;
 uint32_t tiles_per_side(uint32_t res) { return (res + engine::kMeshRenderMaxSide - 1) / engine::kMeshRenderMaxSide; }
 
 // Renders every view of `m` textured with `tex` at res x res pixels, chunk by chunk:
-// fn(first view, views, pixels) with `views` stitched images of res x res x channels.
+// fn(first view, views, pixels, coverage) with `views` stitched images of res x res x
+// channels and their covered triangles (chunks of `per_chunk` views; 0: kChunkPixels).
 template <class Fn>
 void render_views(engine::Engine& engine, const LayoutMesh& m, const Texture& tex,
-                  const std::vector<std::array<float, 16>>& cameras, uint32_t res, Timing& timing, Fn&& fn) {
+                  const std::vector<std::array<float, 16>>& cameras, uint32_t res, Timing& timing, Fn&& fn,
+                  size_t per_chunk = 0) {
   const uint32_t k = tiles_per_side(res), T = res / k, C = tex.channels;
-  const size_t per_chunk = std::max<size_t>(1, kChunkPixels / (size_t(res) * res));
+  if (per_chunk == 0) per_chunk = std::max<size_t>(1, kChunkPixels / (size_t(res) * res));
   engine::MeshRenderDesc d;
   d.width = d.height = T;
   d.positions = m.positions.data(), d.vertex_count = m.positions.size() / 3;
@@ -214,6 +221,7 @@ void render_views(engine::Engine& engine, const LayoutMesh& m, const Texture& te
   d.channels = C, d.mip_levels = tex.levels;
   d.repeat = m.repeat;
   std::vector<float> stitched;
+  std::vector<uint32_t> stitched_coverage;
   for (size_t first = 0; first < cameras.size(); first += per_chunk) {
     const size_t views = std::min(per_chunk, cameras.size() - first);
     d.cameras.clear();
@@ -224,19 +232,24 @@ void render_views(engine::Engine& engine, const LayoutMesh& m, const Texture& te
     auto r = engine.render_mesh(d);
     timing.render += t0.seconds();
     if (k == 1) {
-      fn(first, views, r.pixels.data());
+      fn(first, views, r.pixels.data(), r.coverage.data());
       continue;
     }
     stitched.assign(views * res * res * C, 0.0f);
+    stitched_coverage.assign(views * res * res, engine::kNoMeshTriangle);
     for (size_t v = 0; v < views; ++v)
       for (uint32_t b = 0; b < k; ++b)
         for (uint32_t a = 0; a < k; ++a) {
-          const float* tile = r.pixels.data() + ((v * k + b) * k + a) * size_t(T) * T * C;
-          for (uint32_t j = 0; j < T; ++j)
-            std::copy(tile + size_t(j) * T * C, tile + size_t(j + 1) * T * C,
-                      stitched.data() + ((v * res + size_t(b) * T + j) * res + size_t(a) * T) * C);
+          const size_t tile_index = (v * k + b) * k + a;
+          const float* tile = r.pixels.data() + tile_index * size_t(T) * T * C;
+          const uint32_t* tile_coverage = r.coverage.data() + tile_index * size_t(T) * T;
+          for (uint32_t j = 0; j < T; ++j) {
+            const size_t row = (v * res + size_t(b) * T + j) * res + size_t(a) * T;
+            std::copy(tile + size_t(j) * T * C, tile + size_t(j + 1) * T * C, stitched.data() + row * C);
+            std::copy(tile_coverage + size_t(j) * T, tile_coverage + size_t(j + 1) * T, stitched_coverage.data() + row);
+          }
         }
-    fn(first, views, stitched.data());
+    fn(first, views, stitched.data(), stitched_coverage.data());
   }
 }
 
@@ -269,46 +282,161 @@ std::pair<uint32_t, uint32_t> size_at(double c_r, double ref_texels, double aspe
   return {W, H};
 }
 
+// The reference's views: luminance, unlit, and when the evaluation is lit the lit views
+// too (views x res x res each).
+struct ReferenceViews {
+  std::vector<float> unlit, lit;
+};
+
 // What every evaluation of one reference shares: its layout, the cameras, the view
-// resolution and filter, its views and its costs (image texels, and the paper's texels
-// under the charts).
+// resolution and filter, the shading, its views and its costs (image texels, and the
+// paper's texels under the charts).
 struct Setup {
   LayoutMesh ref;
   std::vector<std::array<float, 16>> cameras;
   TextureFilter filter = TextureFilter::Trilinear;
   ViewResolution resolution;
-  std::vector<float> ref_views;  // views x res x res luminance
+  bool lit = false;              // q is the lit q (EvalOptions::shading resolved)
+  std::string shading_warning;   // auto fell back to unlit: why
+  LightRig rig;
+  ReferenceViews ref_views;
   double image_texels = 0, chart_texels = 0;
   double radius = 0;  // the largest extent of the bounding box
   std::optional<io::AstcOptions> codec;  // EvalOptions::codec
+  double noise_floor_unlit = 0, noise_floor_lit = 0;  // both, when lit
 };
 
-// Mean GMSD of `m` textured with `texture` against the reference views (per view in
-// *per_view): the one place eval turns a texture into q. The noise floor passes cameras
-// and reference views of its own (shifted by a fraction of a pixel).
-double score_views(engine::Engine& engine, const Setup& s, const LayoutMesh& m, const Texture& tex, Timing& timing,
-                   std::vector<float>* per_view = nullptr, const std::vector<std::array<float, 16>>* cameras = nullptr,
-                   const std::vector<float>* ref_views = nullptr) {
-  const uint32_t res = s.resolution.resolution;
-  const size_t n = size_t(res) * res;
-  const float* ref = (ref_views ? *ref_views : s.ref_views).data();
-  std::vector<float> g(s.cameras.size());
-  render_views(engine, m, tex, cameras ? *cameras : s.cameras, res, timing, [&](size_t first, size_t views, const float* px) {
-    gmsd_views(engine, ref + first * n, px, res, views, g.data() + first, timing);
-  });
-  double q = 0;
-  for (float x : g) q += x;
-  q /= double(g.size());
-  if (per_view) *per_view = std::move(g);
-  return q;
+// What one score renders: the driving texture's luminance (unlit) and, when lit, every
+// map of the layout (RGB, in the order of LayoutMesh::maps).
+struct LayoutTextures {
+  Texture driving;
+  std::vector<Texture> maps;
+};
+
+// q of one layout and texture set: `q` and `views` (GMSD per view) of the evaluation's
+// shading, both shadings' q beside (q_lit = 0 when unlit).
+struct Scores {
+  double q = 0, q_unlit = 0, q_lit = 0;
+  std::vector<float> views;
+};
+
+// A layout lit as lit.h says: its geometry with tangents (the file's, else derived from
+// its UVs) and its materials.
+LitSurface lit_surface(const LayoutMesh& m) {
+  LitSurface surface;
+  surface.positions = &m.positions, surface.indices = &m.indices;
+  surface.normals = m.normals;
+  surface.tangents = m.tangents.empty() ? vertex_tangents(m.positions, m.uvs, m.indices, m.normals) : m.tangents;
+  surface.triangle_material = &m.triangle_material, surface.materials = &m.materials;
+  return surface;
 }
 
-// `image` as the curves and as-written scores sample it: after the codec, if any.
-Texture codec_view_texture(const Setup& s, const Image& image, Timing& timing) {
+// Renders every view of `m` with `tex`: fn(first view, views, unlit luminance, lit
+// luminance or null when unlit), chunk by chunk. The unlit render is the same call as
+// ever (bit-identical unlit figures); the lit luminance is shaded on the host from each
+// map's render of the same views and the unlit render's coverage, views in parallel (no
+// shared sums: the same result for any thread count).
+template <class Fn>
+void render_scored_views(engine::Engine& engine, const Setup& s, const LayoutMesh& m, const LayoutTextures& tex,
+                         const std::vector<std::array<float, 16>>& cameras, uint32_t res, Timing& timing, Fn&& fn) {
+  if (!s.lit) {
+    render_views(engine, m, tex.driving, cameras, res, timing,
+                 [&](size_t first, size_t views, const float* px, const uint32_t*) { fn(first, views, px, nullptr); });
+    return;
+  }
+  const LitSurface surface = lit_surface(m);
+  const size_t n = size_t(res) * res;
+  // Each chunk holds the luminance and 3 channels of every map: fewer views a chunk.
+  const size_t per_chunk = std::max<size_t>(1, kChunkPixels / (n * (1 + 3 * tex.maps.size())));
+  std::vector<std::vector<float>> map_px(tex.maps.size());
+  std::vector<float> lit;
+  render_views(
+      engine, m, tex.driving, cameras, res, timing,
+      [&](size_t first, size_t views, const float* px, const uint32_t* coverage) {
+        const std::vector<std::array<float, 16>> chunk(cameras.begin() + long(first), cameras.begin() + long(first + views));
+        for (size_t k = 0; k < tex.maps.size(); ++k)
+          render_views(engine, m, tex.maps[k], chunk, res, timing,
+                       [&](size_t, size_t, const float* mp, const uint32_t*) { map_px[k].assign(mp, mp + views * n * 3); },
+                       views);
+        const Stopwatch t0;
+        lit.assign(views * n, 0.0f);
+        const unsigned threads = std::max(1u, std::min<unsigned>(std::thread::hardware_concurrency(), unsigned(views)));
+        std::vector<std::thread> pool;
+        for (unsigned t = 0; t < threads; ++t)
+          pool.emplace_back([&, t] {
+            std::vector<const float*> maps(tex.maps.size());
+            for (size_t v = t; v < views; v += threads) {
+              for (size_t k = 0; k < maps.size(); ++k) maps[k] = map_px[k].data() + v * n * 3;
+              lit_luminance(surface, s.rig, cameras[first + v], res, res, coverage + v * n, maps, lit.data() + v * n);
+            }
+          });
+        for (auto& th : pool) th.join();
+        timing.shading += t0.seconds();
+        fn(first, views, px, lit.data());
+      },
+      per_chunk);
+}
+
+// Mean GMSD of `m` textured with `tex` against the reference views: the one place eval
+// turns textures into q. The noise floor passes cameras and reference views of its own
+// (shifted by a fraction of a pixel).
+Scores score_views(engine::Engine& engine, const Setup& s, const LayoutMesh& m, const LayoutTextures& tex,
+                   Timing& timing, const std::vector<std::array<float, 16>>* cameras = nullptr,
+                   const ReferenceViews* ref_views = nullptr) {
+  const uint32_t res = s.resolution.resolution;
+  const size_t n = size_t(res) * res;
+  const ReferenceViews& ref = ref_views ? *ref_views : s.ref_views;
+  std::vector<float> g(s.cameras.size()), g_lit(s.lit ? s.cameras.size() : 0);
+  render_scored_views(engine, s, m, tex, cameras ? *cameras : s.cameras, res, timing,
+                      [&](size_t first, size_t views, const float* px, const float* lit) {
+                        gmsd_views(engine, ref.unlit.data() + first * n, px, res, views, g.data() + first, timing);
+                        if (lit) gmsd_views(engine, ref.lit.data() + first * n, lit, res, views, g_lit.data() + first, timing);
+                      });
+  auto mean = [](const std::vector<float>& x) {
+    double q = 0;
+    for (float v : x) q += v;
+    return x.empty() ? 0.0 : q / double(x.size());
+  };
+  Scores r;
+  r.q_unlit = mean(g), r.q_lit = mean(g_lit);
+  r.q = s.lit ? r.q_lit : r.q_unlit;
+  r.views = s.lit ? std::move(g_lit) : std::move(g);
+  return r;
+}
+
+// The resize that brings a layout's textures to a cost: colour textures (the driving
+// texture, base colour and emissive maps) and data textures (normal, occlusion,
+// metallic-roughness: their stored values are linear, so a "linear light" resize of them
+// is the stored-value one).
+using Resize = std::function<Image(const Image&, uint32_t, uint32_t)>;
+struct Resizer {
+  Resize colour, data;
+};
+
+// `m`'s textures as the views sample them: `driving` (the driving texture at its size)
+// and, when lit, every map of `m` brought to the same relative size (each map's sides
+// scaled by driving's over m.full's) by `resize` (none: the maps at their own size, as
+// written), after the codec when `with_codec`.
+LayoutTextures layout_textures(const Setup& s, const LayoutMesh& m, const Image& driving, const Resizer* resize,
+                               bool with_codec, Timing& timing) {
   const Stopwatch t0;
-  Texture tex = view_texture(image, s.filter, false, s.codec ? &*s.codec : nullptr);
+  const io::AstcOptions* codec = with_codec && s.codec ? &*s.codec : nullptr;
+  LayoutTextures t;
+  t.driving = view_texture(driving, s.filter, false, codec);
+  if (s.lit)
+    for (const MaterialMap& map : m.maps) {
+      const bool colour = map.kind == atlas::RebakeRole::Color;
+      if (!resize) {
+        t.maps.push_back(view_texture(map.full, s.filter, true, codec, colour));
+        continue;
+      }
+      const uint32_t w = uint32_t(std::max(1.0, std::round(double(map.full.width) * driving.width / m.full.width)));
+      const uint32_t h = uint32_t(std::max(1.0, std::round(double(map.full.height) * driving.height / m.full.height)));
+      const Image small = (colour ? resize->colour : resize->data)(map.full, w, h);
+      t.maps.push_back(view_texture(small, s.filter, true, codec, colour));
+    }
   timing.textures += t0.seconds();
-  return tex;
+  return t;
 }
 
 // ASTC bytes of `image`'s levels as the views sample them (0 without a codec).
@@ -321,25 +449,17 @@ uint64_t codec_bytes(const Setup& s, uint32_t width, uint32_t height) {
   return n;
 }
 
-// `image` as the views sample it (view_texture), timed.
-Texture timed_view_texture(const Image& image, TextureFilter filter, Timing& timing) {
-  const Stopwatch t0;
-  Texture tex = view_texture(image, filter);
-  timing.textures += t0.seconds();
-  return tex;
-}
-
-double score_views(engine::Engine& engine, const Setup& s, const LayoutMesh& m, const Image& texture, Timing& timing,
-                   std::vector<float>* per_view = nullptr) {
-  return score_views(engine, s, m, timed_view_texture(texture, s.filter, timing), timing, per_view);
-}
-
-// Every view of `m` textured with `tex`, res x res luminance each, view after view.
-std::vector<float> luminance_views(engine::Engine& engine, const LayoutMesh& m, const Texture& tex,
-                                   const std::vector<std::array<float, 16>>& cameras, uint32_t res, Timing& timing) {
-  std::vector<float> out(cameras.size() * res * res);
-  render_views(engine, m, tex, cameras, res, timing, [&](size_t first, size_t views, const float* px) {
-    std::copy(px, px + views * res * res, out.data() + first * res * res);
+// Every view of `m` textured with `tex`, res x res luminance each, view after view
+// (unlit, and lit when the evaluation is).
+ReferenceViews reference_views(engine::Engine& engine, const Setup& s, const LayoutMesh& m, const LayoutTextures& tex,
+                               const std::vector<std::array<float, 16>>& cameras, uint32_t res, Timing& timing) {
+  ReferenceViews out;
+  const size_t n = size_t(res) * res;
+  out.unlit.resize(cameras.size() * n);
+  if (s.lit) out.lit.resize(cameras.size() * n);
+  render_scored_views(engine, s, m, tex, cameras, res, timing, [&](size_t first, size_t views, const float* px, const float* lit) {
+    std::copy(px, px + views * n, out.unlit.data() + first * n);
+    if (lit) std::copy(lit, lit + views * n, out.lit.data() + first * n);
   });
   return out;
 }
@@ -423,6 +543,18 @@ ViewResolution choose_resolution(engine::Engine& engine, const LayoutMesh& ref,
   return r;
 }
 
+// The resizes eval uses (see Resizer): the paper's area filter, and users' Lanczos-3 in
+// stored sRGB values or in linear light.
+Resizer area_resize() {
+  const Resize area = [](const Image& i, uint32_t w, uint32_t h) { return resize_area(i, w, h); };
+  return {area, area};
+}
+Resizer lanczos_resize(bool linear_light) {
+  const Resize stored = [](const Image& i, uint32_t w, uint32_t h) { return resize_lanczos3(i, w, h, false); };
+  if (!linear_light) return {stored, stored};
+  return {[](const Image& i, uint32_t w, uint32_t h) { return resize_lanczos3(i, w, h, true); }, stored};
+}
+
 Setup set_up(const io::GltfFile& reference, engine::Engine& engine, const EvalOptions& o, Timing& timing) {
   if (o.cost_grid.empty()) throw InputError(reference.path, "empty cost grid");
   for (double c : o.cost_grid)
@@ -434,7 +566,19 @@ Setup set_up(const io::GltfFile& reference, engine::Engine& engine, const EvalOp
   if (!(o.resolution_percentile > 0 && o.resolution_percentile <= 1))
     throw InputError(reference.path, "resolution percentile must lie in (0, 1]");
   Setup s;
-  s.ref = detail::extract_layout(reference, "input");
+  // Shading: auto lights assets whose materials have a normal map (the maps the unlit q
+  // cannot see); the others keep the unlit path, untouched. A reference that cannot be lit
+  // (a map on another UV set, a normal map without RGB) is an error when lit was asked for,
+  // and under auto falls back to unlit with a warning in the report.
+  const bool want_lit = o.shading == Shading::Lit || (o.shading == Shading::Auto && detail::has_normal_map(reference));
+  s.ref = detail::extract_layout(reference, "input", want_lit);
+  if (want_lit && !s.ref.lit_problem.empty()) {
+    if (o.shading == Shading::Lit) throw InputError(reference.path, "cannot evaluate lit: " + s.ref.lit_problem);
+    s.shading_warning = "lit shading skipped, q is unlit: " + s.ref.lit_problem;
+  } else {
+    s.lit = want_lit;
+  }
+  s.rig = default_light_rig();
   const LayoutMesh& ref = s.ref;
   s.cameras = dodecahedron_cameras(ref.positions.data(), ref.positions.size() / 3, o.fov_degrees);
   s.filter = o.filter;
@@ -446,16 +590,23 @@ Setup set_up(const io::GltfFile& reference, engine::Engine& engine, const EvalOp
   for (int d = 0; d < 3; ++d) s.radius = std::max(s.radius, hi[d] - lo[d]);
   s.resolution = choose_resolution(engine, ref, s.cameras, o, timing);
   const uint32_t res = s.resolution.resolution;
-  const Texture ref_tex = timed_view_texture(ref.full, s.filter, timing);
-  s.ref_views = luminance_views(engine, ref, ref_tex, s.cameras, res, timing);
+  const LayoutTextures ref_tex = layout_textures(s, ref, ref.full, nullptr, false, timing);
+  s.ref_views = reference_views(engine, s, ref, ref_tex, s.cameras, res, timing);
   if (o.noise_floor) {
     // How far q moves when only the sampling phase does: the input resized to half its
     // texels (Lanczos-3) scored as usual, again with the cameras and the reference views
     // shifted by a quarter pixel (two directions), and resized to 1, 2 and 3 texels more a
     // side; the largest change. Differences between layouts below it are not claimed.
+    // Lit: every map resized alike, both shadings' floors measured (noise_floor is the
+    // evaluation's shading's).
+    const Resizer users = lanczos_resize(false);
     auto [W, H] = size_at(0.5, s.image_texels, double(ref.full.width) / ref.full.height);
-    const Texture half = timed_view_texture(resize_lanczos3(ref.full, W, H, false), s.filter, timing);
-    const double q = score_views(engine, s, ref, half, timing);
+    const LayoutTextures half = layout_textures(s, ref, resize_lanczos3(ref.full, W, H, false), &users, false, timing);
+    const Scores q = score_views(engine, s, ref, half, timing);
+    auto widen = [&](const Scores& other) {
+      s.noise_floor_unlit = std::max(s.noise_floor_unlit, std::abs(other.q_unlit - q.q_unlit));
+      s.noise_floor_lit = std::max(s.noise_floor_lit, std::abs(other.q_lit - q.q_lit));
+    };
     for (const double dy : {0.25, -0.25}) {
       auto jittered = s.cameras;
       const double sx = 2.0 * 0.25 / res, sy = 2.0 * dy / res;  // NDC units
@@ -464,28 +615,31 @@ Setup set_up(const io::GltfFile& reference, engine::Engine& engine, const EvalOp
           m[size_t(c)] = float(double(m[size_t(c)]) + sx * double(m[size_t(12 + c)]));
           m[size_t(4 + c)] = float(double(m[size_t(4 + c)]) + sy * double(m[size_t(12 + c)]));
         }
-      const auto ref_jittered = luminance_views(engine, ref, ref_tex, jittered, res, timing);
-      const double qj = score_views(engine, s, ref, half, timing, nullptr, &jittered, &ref_jittered);
-      s.resolution.noise_floor = std::max(s.resolution.noise_floor, std::abs(qj - q));
+      const ReferenceViews ref_jittered = reference_views(engine, s, ref, ref_tex, jittered, res, timing);
+      widen(score_views(engine, s, ref, half, timing, &jittered, &ref_jittered));
     }
     // The texel grid's phase too: one, two and three texels more a side (under 2 % more
     // texels: no trend to see) move every edge of the resized texture against the screen.
-    for (uint32_t more = 1; more <= 3; ++more) {
-      const Image next = resize_lanczos3(ref.full, W + more, H + more, false);
-      s.resolution.noise_floor = std::max(s.resolution.noise_floor, std::abs(score_views(engine, s, ref, next, timing) - q));
-    }
+    for (uint32_t more = 1; more <= 3; ++more)
+      widen(score_views(engine, s, ref,
+                        layout_textures(s, ref, resize_lanczos3(ref.full, W + more, H + more, false), &users, false, timing),
+                        timing));
+    s.resolution.noise_floor = s.lit ? s.noise_floor_lit : s.noise_floor_unlit;
   }
   s.codec = o.codec;  // after the reference views and the noise floor: those stay uncompressed
   return s;
 }
 
-// A layout as written: its own texture at its real size, its own sampler.
+// A layout as written: its own textures at their real size, its own sampler.
 Scored score_own(engine::Engine& engine, const Setup& s, const LayoutMesh& own, Timing& timing) {
+  if (s.lit && !own.lit_problem.empty()) throw InputError(own.file, "cannot evaluate lit: " + own.lit_problem);
   Scored r;
   const double texels = double(own.full.width) * own.full.height;
   r.c_r = texels / s.image_texels;
   r.c_r_chart = texels * own.uv_area / s.chart_texels;
-  r.q = score_views(engine, s, own, codec_view_texture(s, own.full, timing), timing, &r.q_views);
+  Scores q = score_views(engine, s, own, layout_textures(s, own, own.full, nullptr, true, timing), timing);
+  r.q = q.q, r.q_unlit = q.q_unlit, r.q_lit = q.q_lit, r.lit = s.lit;
+  r.q_views = std::move(q.views);
   return r;
 }
 
@@ -495,7 +649,7 @@ Image contact_sheet(engine::Engine& engine, const LayoutMesh& m, const Image& te
   const Texture tex = view_texture(texture, filter, true);
   std::vector<float> pixels(cameras.size() * thumb * thumb * 3);
   Timing ignored;
-  render_views(engine, m, tex, cameras, thumb, ignored, [&](size_t first, size_t views, const float* px) {
+  render_views(engine, m, tex, cameras, thumb, ignored, [&](size_t first, size_t views, const float* px, const uint32_t*) {
     std::copy(px, px + views * thumb * thumb * 3, pixels.data() + first * thumb * thumb * 3);
   });
   Image sheet;
@@ -577,10 +731,15 @@ AsWrittenScorer::AsWrittenScorer(const io::GltfFile& reference, engine::Engine& 
 AsWrittenScorer::~AsWrittenScorer() = default;
 
 Scored AsWrittenScorer::score(const io::GltfFile& candidate) {
-  return score_own(state_->engine, state_->setup, detail::extract_layout(candidate, "candidate"), state_->timing);
+  return score_own(state_->engine, state_->setup, detail::extract_layout(candidate, "candidate", state_->setup.lit),
+                   state_->timing);
 }
 
 const ViewResolution& AsWrittenScorer::resolution() const { return state_->setup.resolution; }
+
+Shading AsWrittenScorer::shading() const { return state_->setup.lit ? Shading::Lit : Shading::Unlit; }
+
+const std::string& AsWrittenScorer::shading_warning() const { return state_->setup.shading_warning; }
 
 Scored score_as_written(const io::GltfFile& reference, const io::GltfFile& candidate, engine::Engine& engine,
                         const EvalOptions& o) {
@@ -618,6 +777,21 @@ nlohmann::ordered_json evaluate(const io::GltfFile& reference, const std::vector
     const Stopwatch t0;
     std::string method;
     e.mesh.full = detail::rebake_from(ref, e.mesh, W, H, &method);
+    if (s.lit) {
+      // Every map of the reference's materials re-baked into this layout at the same
+      // relative size (its triangles are the reference's, one to one).
+      e.mesh.maps.clear();
+      for (const auto& map : ref.maps) {
+        detail::MaterialMap baked;
+        baked.kind = map.kind;
+        const uint32_t w = uint32_t(std::max(1.0, std::round(double(map.full.width) * W / ref.full.width)));
+        const uint32_t h = uint32_t(std::max(1.0, std::round(double(map.full.height) * H / ref.full.height)));
+        baked.full = detail::rebake_map_from(ref, map, e.mesh, w, h);
+        e.mesh.maps.push_back(std::move(baked));
+      }
+      e.mesh.materials = ref.materials, e.mesh.triangle_material = ref.triangle_material;
+      e.mesh.lit_problem.clear();
+    }
     timing.textures += t0.seconds();
     e.mesh.texture_source = "rebaked";
     e.extra["rebake"] = method;
@@ -633,7 +807,7 @@ nlohmann::ordered_json evaluate(const io::GltfFile& reference, const std::vector
   }
   for (const auto& other : others) {
     Entry e;
-    e.mesh = detail::extract_layout(*other.file, other.name);
+    e.mesh = detail::extract_layout(*other.file, other.name, s.lit);
     if (e.mesh.indices.size() != ref.indices.size())
       throw InputError(other.file->path, "not the same mesh as " + reference.path + " (" +
                                              std::to_string(e.mesh.indices.size() / 3) + " textured triangles, not " +
@@ -662,6 +836,7 @@ nlohmann::ordered_json evaluate(const io::GltfFile& reference, const std::vector
     e.mesh.uv_area = 0;
     for (size_t t = 0; t < e.mesh.indices.size() / 3; ++t) e.mesh.uv_area += detail::uv_area(e.mesh.uvs, e.mesh.indices, t);
     e.mesh.repeat = false;
+    e.mesh.tangents.clear();  // new UVs: the frame comes from them (normal maps re-baked into it)
     e.extra["flatten"] = info;
     rebake_into(e);
     layouts.push_back(std::move(e));
@@ -694,6 +869,10 @@ nlohmann::ordered_json evaluate(const io::GltfFile& reference, const std::vector
   report["noise_floor"] = o.noise_floor ? nlohmann::ordered_json(s.resolution.noise_floor) : nlohmann::ordered_json(nullptr);
   report["fov_degrees"] = o.fov_degrees;
   report["texture_filter"] = to_string(o.filter);
+  report["shading"] = s.lit ? "lit" : "unlit";
+  report["shading_requested"] = to_string(o.shading);
+  if (!s.shading_warning.empty()) report["shading_warning"] = s.shading_warning;
+  if (s.lit && o.noise_floor) report["noise_floor_unlit"] = s.noise_floor_unlit, report["noise_floor_lit"] = s.noise_floor_lit;
   report["triangles"] = ref.indices.size() / 3;
   report["reference"] = {{"file", reference.path}, {"image", ref.image},           {"width", ref.full.width},
                          {"height", ref.full.height}, {"uv_area", ref.uv_area}, {"image_texels", s.image_texels},
@@ -708,11 +887,8 @@ nlohmann::ordered_json evaluate(const io::GltfFile& reference, const std::vector
   report["cost_grid"] = o.cost_grid;
   report["contact_c_r"] = contact;
 
-  using Resize = std::function<Image(const Image&, uint32_t, uint32_t)>;
-  const Resize area = [](const Image& i, uint32_t w, uint32_t h) { return resize_area(i, w, h); };
-  const Resize lanczos_srgb = [](const Image& i, uint32_t w, uint32_t h) { return resize_lanczos3(i, w, h, false); };
-  const Resize lanczos_linear = [](const Image& i, uint32_t w, uint32_t h) { return resize_lanczos3(i, w, h, true); };
-  const Resize* users = nullptr;  // the input's winning resize, once its curve is done (it comes first)
+  const Resizer area = area_resize(), lanczos_srgb = lanczos_resize(false), lanczos_linear = lanczos_resize(true);
+  const Resizer* users = nullptr;  // the input's winning resize, once its curve is done (it comes first)
   struct Curve {
     nlohmann::ordered_json points = nlohmann::ordered_json::array();
     std::vector<std::pair<double, double>> cq;  // (c_r, q) by increasing cost
@@ -720,21 +896,23 @@ nlohmann::ordered_json evaluate(const io::GltfFile& reference, const std::vector
   };
   size_t step = 0;
   const size_t steps = (layouts.size() + 1) * o.cost_grid.size();
-  auto run_curve = [&](const LayoutMesh& m, double aspect, const Resize& resize) {
+  auto run_curve = [&](const LayoutMesh& m, double aspect, const Resizer& resize) {
     Curve c;
     for (double c_r : o.cost_grid) {
       if (progress) progress("curve " + m.name, step, steps);
       ++step;
       auto [W, H] = size_at(c_r, s.image_texels, aspect);
       const Stopwatch t0;
-      const Image tex = resize(m.full, W, H);
+      const Image tex = resize.colour(m.full, W, H);
       timing.textures += t0.seconds();
-      std::vector<float> g;
-      const double q = score_views(engine, s, m, codec_view_texture(s, tex, timing), timing, &g);
+      Scores sc = score_views(engine, s, m, layout_textures(s, m, tex, &resize, true, timing), timing);
+      const double q = sc.q;
       const double actual = double(W) * H / s.image_texels;
       const double chart = double(W) * H * m.uv_area / s.chart_texels;
       c.points.push_back({{"c_r", c_r}, {"c_r_actual", actual}, {"c_r_chart", chart}, {"r", W}, {"width", W},
-                          {"height", H}, {"q", q}, {"q_views", g}});
+                          {"height", H}, {"q", q}});
+      if (s.lit) c.points.back()["q_unlit"] = sc.q_unlit, c.points.back()["q_lit"] = sc.q_lit;
+      c.points.back()["q_views"] = std::move(sc.views);
       if (s.codec) c.points.back()["codec_bytes"] = codec_bytes(s, W, H);
       c.cq.push_back({actual, q});
       c.mean_log_q += std::log(std::max(q, 1e-9)) / double(o.cost_grid.size());  // q = 0: a perfect copy
@@ -758,7 +936,7 @@ nlohmann::ordered_json evaluate(const io::GltfFile& reference, const std::vector
     L["texel_density_spread_log2"] = spread;
     for (auto& [k, v] : e.extra.items()) L[k] = v;
     Curve curve;
-    const Resize* resize = &area;
+    const Resizer* resize = &area;
     if (e.users_resize) {
       // The baseline a user gets from a one-line resize: Lanczos-3 in stored sRGB values
       // (most tools) or in linear light (careful ones), whichever scores better over the
@@ -782,16 +960,19 @@ nlohmann::ordered_json evaluate(const io::GltfFile& reference, const std::vector
       curve = run_curve(m, e.aspect, area);
       L["resize"] = "area";
     }
-    if (e.scored_as_written)
-      L["as_written"] = {{"c_r", e.as_written.c_r}, {"c_r_chart", e.as_written.c_r_chart}, {"q", e.as_written.q},
-                         {"width", e.written_size[0]}, {"height", e.written_size[1]}, {"q_views", e.as_written.q_views}};
+    if (e.scored_as_written) {
+      L["as_written"] = {{"c_r", e.as_written.c_r}, {"c_r_chart", e.as_written.c_r_chart}, {"q", e.as_written.q}};
+      if (s.lit) L["as_written"]["q_unlit"] = e.as_written.q_unlit, L["as_written"]["q_lit"] = e.as_written.q_lit;
+      L["as_written"]["width"] = e.written_size[0], L["as_written"]["height"] = e.written_size[1];
+      L["as_written"]["q_views"] = e.as_written.q_views;
+    }
     L["curve"] = std::move(curve.points);
     curves.push_back(std::move(curve.cq));
     if (artifacts && o.artifacts) {
       auto [W, H] = size_at(contact, s.image_texels, e.aspect);
       LayoutArtifacts a;
       a.name = m.name;
-      a.contact = contact_sheet(engine, m, (*resize)(m.full, W, H), cameras, thumb, o.filter);
+      a.contact = contact_sheet(engine, m, resize->colour(m.full, W, H), cameras, thumb, o.filter);
       a.uv_plot = plot;
       artifacts->layouts.push_back(std::move(a));
     }
@@ -827,6 +1008,7 @@ nlohmann::ordered_json evaluate(const io::GltfFile& reference, const std::vector
   report["seconds"] = {{"textures", timing.textures},
                        {"render", timing.render},
                        {"gmsd", timing.gmsd},
+                       {"shading", timing.shading},
                        {"total", t_start.seconds()}};
   if (progress) progress("done", steps, steps);
   return report;

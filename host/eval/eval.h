@@ -63,13 +63,28 @@
 //   does), sRGB profile (the driving texture is a colour texture): q after the codec, so
 //   that curves compare at equal compressed bytes (with one codec, bytes go with texels;
 //   each curve point carries `codec_bytes`, its levels' blocks). The reference views and
-//   the noise floor stay uncompressed.
+//   the noise floor stay uncompressed. Lit: data maps (normal, occlusion, metallic-roughness)
+//   go through astcenc's linear profile, colour maps through sRGB.
+// - Shading (`shading`, report: shading "unlit" | "lit", shading_requested, and
+//   shading_warning when auto fell back): unlit, q reads the driving texture's luminance;
+//   lit (lit.h), q reads the luminance of the views lit by a fixed rig through the asset's
+//   normal, occlusion / metallic-roughness and emissive maps, so that losing those maps'
+//   detail shows. Lit layouts are every map sharing the driving texture's UVs: at each c_r
+//   every map is resized by the same factor as the driving texture (colour maps by the
+//   input's resize, data maps by the same filter on their stored values), re-baked layouts
+//   re-bake every map (normal maps rotated into the new UV frame where tangents come from
+//   the UVs). Missing maps take glTF's defaults. auto (the default): lit when a material of
+//   the reference has a normalTexture, else unlit, so assets without normal maps keep
+//   their figures bit for bit. When lit, every curve point and as_written carries q (the
+//   lit q), q_unlit and q_lit, and the report noise_floor_unlit and noise_floor_lit beside
+//   noise_floor (the lit one); the savings and the as-written scores (reparam's guard) use q.
 #pragma once
 
 #include "core/image.h"
 #include "engine.h"
 #include "io/astc_codec.h"
 #include "io/gltf_io.h"
+#include "lit.h"
 #include "resize.h"
 
 #include <nlohmann/json.hpp>
@@ -104,6 +119,7 @@ struct EvalOptions {
   bool artifacts = true;      // keep what write_html_report needs (contact sheets, UV plots)
   double fov_degrees = 30;
   std::optional<io::AstcOptions> codec;  // q after ASTC compression (see above); none: uncompressed
+  Shading shading = Shading::Auto;       // which q is q (see above)
 };
 
 // One layout to evaluate: a loaded glTF of the same mesh as the reference.
@@ -134,7 +150,8 @@ using Progress = std::function<void(const std::string& stage, size_t done, size_
 // "lanczos3-linear"), cost_grid, layouts [{name, file, texture, resize, uv_area, full_size,
 // as_written {c_r, c_r_chart, q, width, height} (others only), curve [{c_r, c_r_actual,
 // c_r_chart, r, width, height, q, q_views}]}], savings [{layout, vs,
-// pixel_ratio_at_equal_q, pixel_savings, q_range, points}] (image texels), contact_c_r,
+// pixel_ratio_at_equal_q, pixel_savings, q_range, points}] (image texels), contact_c_r, shading
+// (and q_unlit / q_lit per point when lit: see above),
 // seconds. Throws InputError for assets without a textured triangle primitive or layouts
 // of another mesh.
 nlohmann::ordered_json evaluate(const io::GltfFile& reference, const std::vector<LayoutInput>& others,
@@ -160,9 +177,11 @@ struct ViewResolution {
 };
 
 struct Scored {
-  double c_r = 0, q = 0;
+  double c_r = 0, q = 0;  // q: the lit q when `lit`, else the unlit q
   double c_r_chart = 0;
   std::vector<float> q_views;  // GMSD per view (q is their mean)
+  bool lit = false;
+  double q_unlit = 0, q_lit = 0;  // both shadings when lit (q_lit 0 when unlit)
 };
 Scored score_as_written(const io::GltfFile& reference, const io::GltfFile& candidate, engine::Engine& engine,
                         const EvalOptions& options = {});
@@ -175,6 +194,8 @@ class AsWrittenScorer {
   ~AsWrittenScorer();
   Scored score(const io::GltfFile& candidate);
   const ViewResolution& resolution() const;
+  Shading shading() const;                    // Unlit or Lit: what `auto` resolved to
+  const std::string& shading_warning() const;  // why auto fell back to unlit ("" otherwise)
 
  private:
   struct State;

@@ -8,6 +8,7 @@
 #include "flatten/flatten.h"
 #include "io/asset.h"
 #include "io/image_io.h"
+#include "io/vertex_attribute.h"
 
 #include <algorithm>
 #include <cmath>
@@ -48,7 +49,109 @@ double area3d(const std::vector<float>& p, const std::vector<uint32_t>& ix, size
   return 0.5 * std::sqrt(x * x + y * y + z * z);
 }
 
-LayoutMesh extract_layout(const io::GltfFile& file, const std::string& name) {
+bool has_normal_map(const io::GltfFile& file) {
+  for (const auto& m : file.model.materials)
+    if (m.normalTexture.index >= 0) return true;
+  return false;
+}
+
+namespace {
+
+bool same_transform(const io::TextureTransform& a, const io::TextureTransform& b) {
+  if (!a.present && !b.present) return true;
+  return a.present == b.present && a.offset == b.offset && a.scale == b.scale && a.rotation == b.rotation;
+}
+
+// What lit shading needs of `m`'s primitives (see LayoutMesh). `driving` is each layout
+// primitive's use of the driving texture, in layout order.
+void add_lit_inputs(const io::GltfFile& file, const io::Asset& asset, const std::vector<const io::ImageUse*>& driving,
+                    LayoutMesh& m) {
+  const auto& model = file.model;
+  // Normals and tangents: kept only when every primitive has them (a mix is lit with flat
+  // normals / derived tangents throughout: rare, and never wrong in a way that differs
+  // between layouts of one asset).
+  std::vector<float> normals, tangents;
+  bool all_normals = true, all_tangents = true;
+  for (const io::ImageUse* use : driving) {
+    const auto& prim = asset.primitives[size_t(use->primitive)];
+    auto n = io::vertex_attribute(file, prim.mesh, prim.primitive, "NORMAL", 3);
+    auto t = io::vertex_attribute(file, prim.mesh, prim.primitive, "TANGENT", 4);
+    all_normals = all_normals && !n.empty(), all_tangents = all_tangents && !t.empty();
+    normals.insert(normals.end(), n.begin(), n.end()), tangents.insert(tangents.end(), t.begin(), t.end());
+  }
+  if (all_normals) m.normals = std::move(normals);
+  if (all_tangents) m.tangents = std::move(tangents);
+  // Materials (glTF index -> entry, in order of first use; -1 is the default material).
+  std::map<int, uint32_t> material_of;
+  std::map<std::pair<int, int>, int> map_of;  // (image, kind) -> index into m.maps
+  for (const io::ImageUse* use : driving) {
+    const auto& prim = asset.primitives[size_t(use->primitive)];
+    auto [it, fresh] = material_of.insert({prim.material, uint32_t(m.materials.size())});
+    if (fresh) {
+      LitMaterial lm;
+      if (prim.material >= 0) {
+        const auto& gm = model.materials[size_t(prim.material)];
+        const auto& pbr = gm.pbrMetallicRoughness;
+        for (size_t c = 0; c < 4 && c < pbr.baseColorFactor.size(); ++c) lm.base_color_factor[c] = pbr.baseColorFactor[c];
+        lm.metallic_factor = pbr.metallicFactor, lm.roughness_factor = pbr.roughnessFactor;
+        lm.normal_scale = gm.normalTexture.scale, lm.occlusion_strength = gm.occlusionTexture.strength;
+        for (size_t c = 0; c < 3 && c < gm.emissiveFactor.size(); ++c) lm.emissive_factor[c] = gm.emissiveFactor[c];
+      }
+      m.materials.push_back(lm);
+    }
+    LitMaterial& lm = m.materials[it->second];
+    for (size_t t = 0; t < prim.triangle_count(); ++t) m.triangle_material.push_back(it->second);
+    if (!fresh) continue;
+    // The material's maps, each through this primitive's UVs.
+    for (const auto& img : asset.images)
+      for (const auto& u : img.uses) {
+        if (u.primitive != use->primitive || u.role == io::TextureRole::Other) continue;
+        const std::string slot = "material " + std::to_string(u.material) + " " + u.slot;
+        if (u.tex_coord != use->tex_coord || !same_transform(u.transform, use->transform)) {
+          if (m.lit_problem.empty())
+            m.lit_problem = slot + " samples other UVs (TEXCOORD_" + std::to_string(u.tex_coord) +
+                            " or another transform) than the driving texture: eval renders one UV set";
+          continue;
+        }
+        const atlas::RebakeRole kind = u.role == io::TextureRole::Normal ? atlas::RebakeRole::Normal
+                                       : (u.role == io::TextureRole::BaseColor || u.role == io::TextureRole::Emissive)
+                                           ? atlas::RebakeRole::Color
+                                           : atlas::RebakeRole::Data;
+        auto [mit, new_map] = map_of.insert({{img.index, int(kind)}, int(m.maps.size())});
+        if (new_map) {
+          MaterialMap map;
+          map.image = img.index, map.kind = kind;
+          Image decoded;
+          try {
+            decoded = io::decode_image(file.image_bytes.at(size_t(img.index)),
+                                       file.path + " image " + std::to_string(img.index));
+          } catch (const InputError& e) {
+            // A map the unlit q never read: no reason to fail what used to work; the caller
+            // says why lighting is off (or fails when lit was asked for).
+            if (m.lit_problem.empty()) m.lit_problem = slot + ": " + e.what();
+            decoded.width = decoded.height = 1, decoded.channels = 3, decoded.pixels = {0.5f, 0.5f, 1.0f};
+          }
+          if (kind == atlas::RebakeRole::Normal && decoded.channels < 3 && m.lit_problem.empty())
+            m.lit_problem = slot + ": image " + std::to_string(img.index) + " has " + std::to_string(decoded.channels) +
+                            " channel(s), a normal map needs RGB";
+          map.full = to_rgb(decoded);
+          m.maps.push_back(std::move(map));
+        }
+        switch (u.role) {
+          case io::TextureRole::BaseColor: lm.base_color_map = mit->second; break;
+          case io::TextureRole::Normal: lm.normal_map = mit->second; break;
+          case io::TextureRole::Occlusion: lm.occlusion_map = mit->second; break;
+          case io::TextureRole::MetallicRoughness: lm.metallic_roughness_map = mit->second; break;
+          case io::TextureRole::Emissive: lm.emissive_map = mit->second; break;
+          default: break;
+        }
+      }
+  }
+}
+
+}  // namespace
+
+LayoutMesh extract_layout(const io::GltfFile& file, const std::string& name, bool lit) {
   io::Asset asset = io::build_asset(file);
   // The driving texture: base colour first, then the most triangles sampling it.
   int best = -1;
@@ -75,9 +178,11 @@ LayoutMesh extract_layout(const io::GltfFile& file, const std::string& name) {
   for (const auto& img : asset.images)
     if (img.index == best) image = &img;
   std::set<int> done;
+  std::vector<const io::ImageUse*> driving;  // per layout primitive, in order
   for (const auto& use : image->uses) {
     const auto& prim = asset.primitives[size_t(use.primitive)];
     if (size_t(use.tex_coord) >= prim.uv_sets.size() || !done.insert(use.primitive).second) continue;
+    driving.push_back(&use);
     if (done.size() == 1) m.repeat = use.wrap_s == 10497 && use.wrap_t == 10497;
     const uint32_t base = uint32_t(m.positions.size() / 3);
     m.positions.insert(m.positions.end(), prim.positions.begin(), prim.positions.end());
@@ -92,6 +197,7 @@ LayoutMesh extract_layout(const io::GltfFile& file, const std::string& name) {
   m.full = to_rgb(io::decode_image(file.image_bytes.at(size_t(best)), file.path + " image " + std::to_string(best)));
   for (size_t t = 0; t < m.indices.size() / 3; ++t) m.uv_area += uv_area(m.uvs, m.indices, t), m.area3d += area3d(m.positions, m.indices, t);
   if (!(m.uv_area > 0)) throw InputError(file.path, "the UVs of the textured primitives have no area");
+  if (lit) add_lit_inputs(file, asset, driving, m);
   return m;
 }
 
@@ -105,7 +211,11 @@ bool same_triangles(const LayoutMesh& a, const LayoutMesh& b, double tol) {
   return true;
 }
 
-Image rebake_from(const LayoutMesh& ref, const LayoutMesh& target, uint32_t W, uint32_t H, std::string* method) {
+namespace {
+
+// `source` (sampled through ref's UVs) re-baked into target's corresponding triangles.
+Image rebake_image(const LayoutMesh& ref, const Image& source, const LayoutMesh& target, uint32_t W, uint32_t H,
+                   atlas::RebakeRole role) {
   // Corner-expanded UV arrays: triangle t of `target` is triangle t of `ref`.
   std::vector<float> old_uv(2 * ref.indices.size()), new_uv(2 * ref.indices.size());
   for (size_t k = 0; k < ref.indices.size(); ++k)
@@ -119,10 +229,25 @@ Image rebake_from(const LayoutMesh& ref, const LayoutMesh& target, uint32_t W, u
   mesh.old_uv = old_uv.data(), mesh.new_uv = new_uv.data(), mesh.vertex_count = corners.size();
   atlas::RebakeOptions o;
   o.width = W, o.height = H;
-  o.role = atlas::RebakeRole::Color;
+  o.role = role;
   o.wrap_s = o.wrap_t = ref.repeat ? atlas::kWrapRepeat : atlas::kWrapClampToEdge;
+  return atlas::rebake(source, {mesh}, o);
+}
+
+}  // namespace
+
+Image rebake_from(const LayoutMesh& ref, const LayoutMesh& target, uint32_t W, uint32_t H, std::string* method) {
   if (method) *method = "atlas::rebake";
-  return atlas::rebake(ref.full, {mesh}, o);
+  return rebake_image(ref, ref.full, target, W, H, atlas::RebakeRole::Color);
+}
+
+Image rebake_map_from(const LayoutMesh& ref, const MaterialMap& map, const LayoutMesh& target, uint32_t W, uint32_t H) {
+  // Normals follow the new UV frame only where the target's tangents come from its UVs
+  // (no TANGENT): with stored tangents the frame is the old one and the texels stay data,
+  // as reparam re-bakes them.
+  const atlas::RebakeRole role =
+      map.kind == atlas::RebakeRole::Normal && !target.tangents.empty() ? atlas::RebakeRole::Data : map.kind;
+  return rebake_image(ref, map.full, target, W, H, role);
 }
 
 std::vector<float> isometric_uvs(const LayoutMesh& ref, double* aspect, nlohmann::ordered_json* info) {

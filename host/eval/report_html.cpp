@@ -152,7 +152,13 @@ void write_html_report(const nlohmann::ordered_json& report, const EvalArtifacts
     << "input's image; the paper's c<sub>r</sub> (texels under the charts, eq. 20&ndash;21) is in each cell's tooltip. "
     << "The input layout's texture is resized as users' tools do (" << escape(report.value("input_resize", std::string("?")))
     << ", the stronger of Lanczos-3 in sRGB values and in linear light); other layouts are re-baked and area-filtered. "
-    << "&ldquo;As written&rdquo;: a file's own texture at its real size.</p>\n";
+    << "&ldquo;As written&rdquo;: a file's own texture at its real size. Shading: "
+    << (report.value("shading", std::string("unlit")) == "lit"
+            ? std::string("lit (q from views lit by a fixed rig through the normal, occlusion, metallic-roughness and "
+                          "emissive maps; each point's unlit q in its tooltip)")
+            : std::string("unlit (q from the base colour's luminance)"))
+    << (report.contains("shading_warning") ? " &mdash; " + escape(report["shading_warning"].get<std::string>()) : "")
+    << "; the contact sheets show the base colour.</p>\n";
 
   h << "<h2>Pixel savings at equal quality</h2>\n";
   bool any = false;
@@ -181,7 +187,8 @@ void write_html_report(const nlohmann::ordered_json& report, const EvalArtifacts
       << L["full_size"][1].get<int>() << "</td>";
     for (const auto& p : L["curve"])
       h << "<td title=\"" << p["width"].get<int>() << "x" << p["height"].get<int>() << ", c_r "
-        << fmt(p["c_r_actual"].get<double>()) << ", chart c_r " << fmt(p.value("c_r_chart", 0.0)) << "\">"
+        << fmt(p["c_r_actual"].get<double>()) << ", chart c_r " << fmt(p.value("c_r_chart", 0.0))
+        << (p.contains("q_unlit") ? ", unlit q " + fmt(p["q_unlit"].get<double>()) : std::string()) << "\">"
         << fmt(p["q"].get<double>()) << "</td>";
     if (L.contains("as_written"))
       h << "<td>q " << fmt(L["as_written"]["q"].get<double>()) << " at c<sub>r</sub> "

@@ -111,7 +111,7 @@ Image resize_lanczos3(const Image& in, uint32_t W, uint32_t H, bool linear_light
   return out;
 }
 
-std::vector<Image> mip_chain(const Image& image, uint32_t levels) {
+std::vector<Image> mip_chain(const Image& image, uint32_t levels, bool colour) {
   std::vector<Image> chain;
   if (levels == 0) return chain;
   chain.push_back(image);
@@ -119,14 +119,14 @@ std::vector<Image> mip_chain(const Image& image, uint32_t levels) {
   const uint32_t C = image.channels;
   Image linear = image;
   for (size_t k = 0; k < linear.pixels.size(); ++k)
-    if (is_colour(uint32_t(k % C), C)) linear.pixels[k] = decode(linear.pixels[k]);
+    if (colour && is_colour(uint32_t(k % C), C)) linear.pixels[k] = decode(linear.pixels[k]);
   for (uint32_t l = 1; l < levels; ++l) {
     // From the level above, as glGenerateMipmap does: a quarter of the work of filtering
     // level 0 each time, the same 2 x 2 box for even sides.
     linear = resize_area(linear, std::max(1u, image.width >> l), std::max(1u, image.height >> l));
     Image level = linear;
     for (size_t k = 0; k < level.pixels.size(); ++k)
-      if (is_colour(uint32_t(k % C), C)) level.pixels[k] = atlas::linear_to_srgb(level.pixels[k]);
+      if (colour && is_colour(uint32_t(k % C), C)) level.pixels[k] = atlas::linear_to_srgb(level.pixels[k]);
     chain.push_back(std::move(level));
   }
   return chain;

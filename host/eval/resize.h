@@ -31,7 +31,8 @@ Image resize_lanczos3(const Image& image, uint32_t width, uint32_t height, bool 
 // texture): `levels` images, level 0 the image itself and level l of max(1, W >> l) x
 // max(1, H >> l) texels, each the exact box (area) filter of the level above in linear
 // light (colour channels decoded before and encoded after, alpha as stored), as
-// glGenerateMipmap builds it. What eval's trilinear views sample.
-std::vector<Image> mip_chain(const Image& image, uint32_t levels);
+// glGenerateMipmap builds it. What eval's trilinear views sample. colour = false: a data
+// texture (normal, occlusion, metallic-roughness), every channel boxed as stored.
+std::vector<Image> mip_chain(const Image& image, uint32_t levels, bool colour = true);
 
 }  // namespace uvpress::eval

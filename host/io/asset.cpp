@@ -1,4 +1,5 @@
 #include "io/asset.h"
+#include "io/vertex_attribute.h"
 
 #include "core/error.h"
 
@@ -345,6 +346,25 @@ Asset build_asset(const GltfFile& file) {
     }
   }
   return asset;
+}
+
+std::vector<float> vertex_attribute(const GltfFile& file, int mesh, int primitive, const std::string& name, int width) {
+  Reader r(file);
+  const tinygltf::Model& m = r.model();
+  if (mesh < 0 || size_t(mesh) >= m.meshes.size() || primitive < 0 ||
+      size_t(primitive) >= m.meshes[size_t(mesh)].primitives.size())
+    r.fail("mesh " + std::to_string(mesh) + " primitive " + std::to_string(primitive) + " does not exist");
+  const auto& gp = m.meshes[size_t(mesh)].primitives[size_t(primitive)];
+  const auto it = gp.attributes.find(name), pos = gp.attributes.find("POSITION");
+  if (it == gp.attributes.end()) return {};
+  const std::string what = "mesh " + std::to_string(mesh) + " primitive " + std::to_string(primitive) + " " + name;
+  std::vector<float> v = r.floats(it->second, width, what);
+  if (pos == gp.attributes.end() || pos->second < 0 || size_t(pos->second) >= m.accessors.size() ||
+      v.size() != m.accessors[size_t(pos->second)].count * size_t(width))
+    r.fail(what + ": count differs from POSITION count");
+  for (float x : v)
+    if (!std::isfinite(x)) r.fail(what + " has non-finite values");
+  return v;
 }
 
 }  // namespace uvpress::io

@@ -235,12 +235,12 @@ std::string hash_asset(const std::string& path, const io::RefPolicy& refs) {
 json options_json(const BatchOptions& o) {
   const auto& r = o.reparam;
   json j = {{"uvpress", o.version}, {"algorithm", kReparamRevision}, {"format", o.format}, {"cost", r.size ? json(nullptr) : json(r.cost)},
-            {"size", r.size}, {"max_gmsd", r.max_gmsd}, {"pot", r.power_of_two}, {"keep_aspect", r.keep_aspect}, {"score_resolution", r.score_resolution}, {"score_filter", eval::to_string(r.score_filter)}, {"gutter", r.gutter == ReparamOptions::kAutoGutter ? json("auto") : json(r.gutter)}, {"block", r.block},
+            {"size", r.size}, {"max_gmsd", r.max_gmsd}, {"pot", r.power_of_two}, {"keep_aspect", r.keep_aspect}, {"score_resolution", r.score_resolution}, {"score_filter", eval::to_string(r.score_filter)}, {"score_shading", eval::to_string(r.score_shading)}, {"gutter", r.gutter == ReparamOptions::kAutoGutter ? json("auto") : json(r.gutter)}, {"block", r.block},
             {"optimize", r.optimize}, {"epsilon", r.triangle.epsilon}, {"evaluations", r.triangle.evaluations},
             {"view_size", r.triangle.view_size}, {"seed", r.triangle.seed}, {"early_stop", r.triangle.early_stop}, {"eval", o.eval},
             {"allow_outside_refs", o.refs.allow_outside},
             {"texture_format", o.astc ? json{{"astc", io::block_name(*o.astc)}, {"quality", io::to_string(o.astc->quality)}} : json("source")}};
-  if (o.eval) j["eval_options"] = {{"cost_grid", o.eval_options.cost_grid}, {"resolution", o.eval_options.resolution}, {"filter", eval::to_string(o.eval_options.filter)}};
+  if (o.eval) j["eval_options"] = {{"cost_grid", o.eval_options.cost_grid}, {"resolution", o.eval_options.resolution}, {"filter", eval::to_string(o.eval_options.filter)}, {"shading", eval::to_string(o.eval_options.shading)}};
   return j;
 }
 

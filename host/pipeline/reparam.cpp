@@ -949,12 +949,15 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
     eval::EvalOptions score_options;
     score_options.artifacts = false;
     score_options.resolution = o.score_resolution, score_options.filter = o.score_filter;
+    score_options.shading = o.score_shading;
     score_options.noise_floor = false;  // eval's 7 extra renders; the candidates are compared as measured
     try {
       scorer = std::make_unique<eval::AsWrittenScorer>(original, engine, score_options);
       const auto& r = scorer->resolution();
       report["scoring"] = {{"resolution", r.resolution},          {"filter", eval::to_string(o.score_filter)},
-                           {"resolution_capped", r.capped},       {"resolved_fraction", r.resolved_fraction}};
+                           {"resolution_capped", r.capped},       {"resolved_fraction", r.resolved_fraction},
+                           {"shading", eval::to_string(scorer->shading())}};
+      if (!scorer->shading_warning().empty()) warnings.push_back("scoring: " + scorer->shading_warning());
     } catch (const InputError& e) {
       // eval cannot score this asset (e.g. no UV area to frame): keep the paper's layout,
       // skip the guard, and say so.
@@ -1071,7 +1074,7 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
     // --max-gmsd: the cheapest point of the new layout's q-c curve that meets the bound.
     Stopwatch t0;
     eval::EvalOptions eo;
-    eo.resolution = o.score_resolution, eo.filter = o.score_filter;
+    eo.resolution = o.score_resolution, eo.filter = o.score_filter, eo.shading = o.score_shading;
     eo.noise_floor = false;
     eo.artifacts = false;
     eo.cost_grid = {0.05, 0.1, 0.15, 0.2, 0.25, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0};

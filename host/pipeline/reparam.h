@@ -21,7 +21,7 @@ namespace uvpress::pipeline {
 // Which algorithm wrote an output: raised by every change that changes reparam's outputs
 // for the same input and options (layouts, bakes, gutters, encoders), so that a resumed
 // batch redoes what an older algorithm wrote (batch compares it with the options).
-constexpr int kReparamRevision = 4;  // 2: image-edge gutters by sampler, surround in gutters; 3: equal-slope candidates, least squares keeps the surround; 4: the wide-gutter variant
+constexpr int kReparamRevision = 5;  // 2: image-edge gutters by sampler, surround in gutters; 3: equal-slope candidates, least squares keeps the surround; 4: the wide-gutter variant; 5: normal-mapped assets scored lit (candidates, guard)
 
 struct ReparamOptions {
   double cost = 0.5;       // relative pixel cost c_r of the new textures vs the old (eq. 20-21)
@@ -67,6 +67,9 @@ struct ReparamOptions {
   // resolution (0: auto) and texture filter (host/eval/eval.h).
   uint32_t score_resolution = 0;
   eval::TextureFilter score_filter = eval::TextureFilter::Trilinear;
+  // Their shading (eval::Shading): auto lights assets with normal maps, so the guard sees
+  // what a layout does to them.
+  eval::Shading score_shading = eval::Shading::Auto;
   perceptual::TriangleStageOptions triangle;
 };
 

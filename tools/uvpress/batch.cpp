@@ -105,7 +105,9 @@ void add_batch(CLI::App& app, Globals& g) {
                 "Write reparam's layout even when a plain resize to the same texels looks better");
   cmd->add_flag("--eval", o.eval, "Also evaluate each result against its input (NAME.eval.json)");
   add_view_options(cmd, o.eval_options.resolution, o.eval_options.filter, "--eval-");
+  add_shading_option(cmd, o.eval_options.shading, "--eval-");
   add_view_options(cmd, o.reparam.score_resolution, o.reparam.score_filter, "--score-");
+  add_shading_option(cmd, o.reparam.score_shading, "--score-");
   cmd->add_option("--eval-cost-grid", a->grid, "eval: relative costs, each in (0, 4], comma-separated")
       ->delimiter(',')
       ->check(cost_grid_value());

@@ -18,12 +18,13 @@ void add_bench_eval(CLI::App& bench, Globals& g) {
   auto view = std::make_shared<eval::EvalOptions>();
   cmd->add_option("--asset", *asset, "glTF asset")->capture_default_str();
   add_view_options(cmd, view->resolution, view->filter, "--");
+  add_shading_option(cmd, view->shading, "--");
   cmd->callback([&g, asset, view] {
     g.action = [&g, asset, view] {
       if (!std::filesystem::exists(*asset)) throw InputError(*asset, "file not found (give --asset PATH)");
       io::GltfFile file = io::load_gltf(*asset, g.refs());
       eval::EvalOptions o;
-      o.resolution = view->resolution, o.filter = view->filter;
+      o.resolution = view->resolution, o.filter = view->filter, o.shading = view->shading;
       o.artifacts = false;
       for (auto& b : available_backends(g)) {
         const auto t0 = std::chrono::steady_clock::now();
@@ -40,12 +41,14 @@ void add_bench_eval(CLI::App& bench, Globals& g) {
                                        {"views", report["views"]},
                                        {"resolution", report["resolution"]},
                                        {"filter", report["texture_filter"]},
+                                       {"shading", report["shading"]},
                                        {"resolved_fraction", report["resolved_fraction"]},
                                        {"c_r_points", o.cost_grid.size()},
                                        {"seconds", s},
                                        {"render_s", report["seconds"]["render"]},
                                        {"gmsd_s", report["seconds"]["gmsd"]},
-                                       {"textures_s", report["seconds"]["textures"]}};
+                                       {"textures_s", report["seconds"]["textures"]},
+                                       {"shading_s", report["seconds"]["shading"]}};  // lit views on the host
         std::printf("%s\n", line.dump().c_str());
         std::fflush(stdout);
       }

@@ -3,7 +3,9 @@
 // against the input (the input curve is the Lanczos-3 resize) and the isometric layout.
 // One JSON line per asset: the pixel ratios at equal q from the layout's own curve
 // (whatever the guard wrote), q at the output cost for the written file and for the
-// resize, what the guard chose, and seconds.
+// resize, what the guard chose, and seconds. q is the lit q for assets with normal maps
+// (eval's --shading auto, the default of --shading and --score-shading): the line says
+// which (`shading`: eval's, `score_shading`: reparam's guard and curve).
 #include "bench.h"
 
 #include "core/error.h"
@@ -49,7 +51,9 @@ void add_bench_quality(CLI::App& bench, Globals& g) {
   cmd->add_option("--evaluations", a->reparam.triangle.evaluations, "reparam --evaluations")->capture_default_str()->check(CLI::Range(11, 1000));
   cmd->add_flag("--early-stop", a->reparam.triangle.early_stop, "reparam --early-stop");
   add_view_options(cmd, a->view.resolution, a->view.filter, "--");
+  add_shading_option(cmd, a->view.shading, "--");
   add_view_options(cmd, a->reparam.score_resolution, a->reparam.score_filter, "--score-");
+  add_shading_option(cmd, a->reparam.score_shading, "--score-");
   cmd->callback([&g, a] {
     g.action = [&g, a] {
       const auto inputs = bench_assets(a->shared, a->only_given, a->assets);  // name, path ("" = the demo)
@@ -75,13 +79,15 @@ void add_bench_quality(CLI::App& bench, Globals& g) {
         const bool compared = guard.is_object() && guard.contains("q_resize");
         line["q_reparam"] = compared ? guard["q_reparam"] : nlohmann::ordered_json(nullptr);
         line["q_resize"] = compared ? guard["q_resize"] : nlohmann::ordered_json(nullptr);
+        // reparam's guard and curve scored with this shading (its --score-shading).
+        line["score_shading"] = report.contains("scoring") ? report["scoring"].value("shading", "") : "";
         std::string why;
         if (report["chosen"] == "untouched") {
           line["ratio_vs_resize"] = nullptr, line["ratio_vs_isometric"] = nullptr;
           why = "reparam left every layout untouched";
         } else {
           eval::EvalOptions eo;
-          eo.resolution = a->view.resolution, eo.filter = a->view.filter;
+          eo.resolution = a->view.resolution, eo.filter = a->view.filter, eo.shading = a->view.shading;
           eo.flatten = true;
           eo.artifacts = false;
           auto ev = eval::evaluate(input, {{"reparam", &layout}}, *engine, eo);
@@ -105,6 +111,10 @@ void add_bench_quality(CLI::App& bench, Globals& g) {
           line["ratio_vs_isometric_rebaked"] = ratio_vs(ev, "flatten", &why);
           line["curve"] = report["curve"];
           line["input_resize"] = ev.value("input_resize", "");
+          // Which q the ratios and q values are (auto: lit for assets with normal maps), and
+          // both shadings' noise floors when lit.
+          line["shading"] = ev["shading"];
+          if (ev.contains("shading_warning")) line["shading_warning"] = ev["shading_warning"];
         }
         if (!why.empty()) line["why_null"] = why;
         line["candidates"] = report["candidates"];

@@ -59,6 +59,8 @@ CLI::Validator cost_grid_value();
 // trilinear|bilinear (prefix "--" for eval and the benches, "--eval-" for batch's eval,
 // "--score-" for the views reparam scores its candidates and guard with).
 void add_view_options(CLI::App* cmd, uint32_t& resolution, eval::TextureFilter& filter, const std::string& prefix);
+// eval's shading on `cmd`: PREFIXshading auto|unlit|lit (prefixes as above).
+void add_shading_option(CLI::App* cmd, eval::Shading& shading, const std::string& prefix);
 
 // GPU-ready copies of the written textures (gpu_output.cpp): --texture-format source|astc,
 // --astc-block WxH, --astc-quality Q.

@@ -1,5 +1,5 @@
 // uvpress eval REFERENCE [OTHER ...] [--flatten] [--paper-baseline] [--cost-grid ...]
-//   [--resolution auto|N] [--filter trilinear|bilinear] [--report FILE.json] [--html DIR]: perceptual quality against pixel
+//   [--resolution auto|N] [--filter trilinear|bilinear] [--shading auto|unlit|lit] [--report FILE.json] [--html DIR]: perceptual quality against pixel
 // cost (image texels) over 20 dodecahedron views (seed paper 001, section 5.1) for the
 // reference's layout (resized as users do), each other glTF of the same mesh (and as
 // written), and the isometric (flatten) layout; see host/eval/eval.h.
@@ -55,6 +55,20 @@ void add_view_options(CLI::App* cmd, uint32_t& resolution, eval::TextureFilter& 
       ->type_name("trilinear|bilinear");
 }
 
+void add_shading_option(CLI::App* cmd, eval::Shading& shading, const std::string& prefix) {
+  cmd->add_option_function<std::string>(
+         prefix + "shading",
+         [&shading, prefix](const std::string& v) {
+           const auto s = eval::parse_shading(v);
+           if (!s) throw CLI::ValidationError(prefix + "shading", "must be auto, unlit or lit");
+           shading = *s;
+         },
+         (prefix == "--score-" ? std::string("reparam's candidates and guard: ") : std::string()) +
+             "q from the base colour's luminance (unlit) or from views lit through the normal, occlusion, "
+             "metallic-roughness and emissive maps (lit); auto: lit when a material has a normal map (default)")
+      ->type_name("auto|unlit|lit");
+}
+
 void add_eval(CLI::App& app, Globals& g) {
   auto* cmd = app.add_subcommand("eval", "Quality (mean GMSD over 20 views) against pixel cost for several UV layouts");
   struct Args {
@@ -81,6 +95,7 @@ void add_eval(CLI::App& app, Globals& g) {
       ->delimiter(',')
       ->check(cost_grid_value());
   add_view_options(cmd, a->view.resolution, a->view.filter, "--");
+  add_shading_option(cmd, a->view.shading, "--");
   cmd->add_option("--contact-cost", a->contact, "c_r of the contact sheet (default: the grid point nearest 0.25)");
   cmd->add_option("--html", a->html, "Write an offline HTML report into this folder");
   cmd->add_option_function<std::string>(
@@ -125,7 +140,7 @@ void add_eval(CLI::App& app, Globals& g) {
       auto engine = g.make_engine();
       eval::EvalOptions o;
       if (!a->grid.empty()) o.cost_grid = a->grid;
-      o.resolution = a->view.resolution, o.filter = a->view.filter;
+      o.resolution = a->view.resolution, o.filter = a->view.filter, o.shading = a->view.shading;
       o.flatten = a->flatten;
       o.paper_baseline = a->paper_baseline;
       o.contact_cost = a->contact;
@@ -158,12 +173,14 @@ void add_eval(CLI::App& app, Globals& g) {
                         s["vs"].get<std::string>().c_str(), 100 * s["pixel_ratio_at_equal_q"].get<double>());
           summary += buf;
         }
+      if (report.contains("shading_warning")) summary += "; " + report["shading_warning"].get<std::string>();
       const std::string codec = o.codec ? ", after ASTC " + io::block_name(*o.codec) + " " + io::to_string(o.codec->quality) : "";
       std::printf("eval: %zu layouts x %zu costs (image texels; input resized %s%s), %d views at %u px (%s, %.0f%% of "
-                  "the surface resolved), noise floor q %.2g, in %.1f s%s\n",
+                  "the surface resolved, %s), noise floor q %.2g, in %.1f s%s\n",
                   report["layouts"].size(), o.cost_grid.size(), report["input_resize"].get<std::string>().c_str(),
                   codec.c_str(), report["views"].get<int>(), report["resolution"].get<unsigned>(),
                   report["texture_filter"].get<std::string>().c_str(), 100 * report["resolved_fraction"].get<double>(),
+                  report["shading"].get<std::string>().c_str(),
                   report["noise_floor"].is_null() ? 0.0 : report["noise_floor"].get<double>(),
                   report["seconds"]["total"].get<double>(), summary.c_str());
       return 0;
