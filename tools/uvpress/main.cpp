@@ -1,9 +1,9 @@
 // uvpress: makes textured 3-D assets cheaper without making them look worse.
 // Exit codes: 0 ok, 1 runtime or input error (one stderr line: file and reason), 2 usage.
 #include "cli.h"
-#include "core/report_schema.h"
 
 #include "core/error.h"
+#include "core/report_schema.h"
 #include "io/atomic_file.h"
 
 #include <csignal>
