@@ -12,7 +12,6 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <thread>
 
 namespace uvpress::eval {
 
@@ -253,6 +252,15 @@ void render_views(engine::Engine& engine, const LayoutMesh& m, const Texture& te
   }
 }
 
+// fn(v) for every view v < count, views spread over the threads (each view writes only its
+// own outputs: the same result for any thread count). The one place eval runs views in
+// parallel on the host.
+template <class Fn>
+void for_each_view(size_t count, Fn&& fn) {
+#pragma omp parallel for schedule(static)
+  for (long v = 0; v < long(count); ++v) fn(size_t(v));
+}
+
 // GMSD of `count` view pairs of res x res.
 void gmsd_views(engine::Engine& engine, const float* ref, const float* img, uint32_t res, size_t count, float* out,
                 Timing& timing) {
@@ -263,13 +271,7 @@ void gmsd_views(engine::Engine& engine, const float* ref, const float* img, uint
     std::copy(g.begin(), g.end(), out);
   } else {
     const size_t n = size_t(res) * res;
-    const unsigned threads = std::max(1u, std::min<unsigned>(std::thread::hardware_concurrency(), unsigned(count)));
-    std::vector<std::thread> pool;
-    for (unsigned t = 0; t < threads; ++t)
-      pool.emplace_back([&, t] {
-        for (size_t v = t; v < count; v += threads) out[v] = engine::cpu::gmsd<float>(ref + v * n, img + v * n, res, res);
-      });
-    for (auto& th : pool) th.join();
+    for_each_view(count, [&](size_t v) { out[v] = engine::cpu::gmsd<float>(ref + v * n, img + v * n, res, res); });
   }
   timing.gmsd += t0.seconds();
 }
@@ -360,17 +362,11 @@ void render_scored_views(engine::Engine& engine, const Setup& s, const LayoutMes
                        views);
         const Stopwatch t0;
         lit.assign(views * n, 0.0f);
-        const unsigned threads = std::max(1u, std::min<unsigned>(std::thread::hardware_concurrency(), unsigned(views)));
-        std::vector<std::thread> pool;
-        for (unsigned t = 0; t < threads; ++t)
-          pool.emplace_back([&, t] {
-            std::vector<const float*> maps(tex.maps.size());
-            for (size_t v = t; v < views; v += threads) {
-              for (size_t k = 0; k < maps.size(); ++k) maps[k] = map_px[k].data() + v * n * 3;
-              lit_luminance(surface, s.rig, cameras[first + v], res, res, coverage + v * n, maps, lit.data() + v * n);
-            }
-          });
-        for (auto& th : pool) th.join();
+        for_each_view(views, [&](size_t v) {
+          std::vector<const float*> maps(tex.maps.size());
+          for (size_t k = 0; k < maps.size(); ++k) maps[k] = map_px[k].data() + v * n * 3;
+          lit_luminance(surface, s.rig, cameras[first + v], res, res, coverage + v * n, maps, lit.data() + v * n);
+        });
         timing.shading += t0.seconds();
         fn(first, views, px, lit.data());
       },

@@ -93,13 +93,19 @@ void write_json(const fs::path& path, const json& j) {
   w.commit();
 }
 
+// A file of an asset's output that batch may delete: beside the output and named for the
+// asset (what asset_files lists could name anything; the rest is not ours).
+bool owned_by(const BatchItem& item, const fs::path& out, const fs::path& f) {
+  return f.parent_path() == out.parent_path() && f.filename().string().rfind(item.name, 0) == 0;
+}
+
 // Removes what an earlier run left for this asset (its output files and eval report).
 void remove_outputs(const BatchItem& item, const BatchOptions& o) {
   std::error_code ec;
   fs::path out = output_path(item, o);
   if (fs::exists(out, ec))
     for (const auto& f : asset_files(out))
-      if (f.parent_path() == out.parent_path() && f.filename().string().rfind(item.name, 0) == 0) fs::remove(f, ec);
+      if (owned_by(item, out, f)) fs::remove(f, ec);
   fs::remove(eval_path(item, o), ec);
 }
 
@@ -279,9 +285,7 @@ json process_asset(const BatchItem& item, const BatchOptions& o, engine::Engine*
       const std::vector<fs::path> now = asset_files(out);
       std::error_code ec;
       for (const fs::path& f : earlier)
-        if (std::find(now.begin(), now.end(), f) == now.end() && f.parent_path() == out.parent_path() &&
-            f.filename().string().rfind(item.name, 0) == 0)
-          fs::remove(f, ec);
+        if (std::find(now.begin(), now.end(), f) == now.end() && owned_by(item, out, f)) fs::remove(f, ec);
     }
     report["output"] = out.string();
     report["output_bytes"] = io::asset_bytes(out.string()).total();
