@@ -6,6 +6,7 @@
 #include "io/asset_bytes.h"
 #include "io/atomic_file.h"
 #include "io/gltf_io.h"
+#include "io/gltf_rules.h"
 #include "io/gpu_textures.h"
 
 #include <omp.h>
@@ -246,6 +247,7 @@ json options_json(const BatchOptions& o) {
             {"view_size", r.triangle.view_size}, {"seed", r.triangle.seed}, {"early_stop", r.triangle.early_stop}, {"eval", o.eval},
             {"allow_outside_refs", o.refs.allow_outside},
             {"texture_format", o.astc ? json{{"astc", io::block_name(*o.astc)}, {"quality", io::to_string(o.astc->quality)}} : json("source")}};
+  if (o.strict) j["strict"] = true;  // absent when off: earlier results stay current
   if (o.eval) j["eval_options"] = {{"cost_grid", o.eval_options.cost_grid}, {"resolution", o.eval_options.resolution}, {"filter", eval::to_string(o.eval_options.filter)}, {"shading", eval::to_string(o.eval_options.shading)}};
   return j;
 }
@@ -274,8 +276,14 @@ json process_asset(const BatchItem& item, const BatchOptions& o, engine::Engine*
   try {
     if (!engine) throw engine::EngineError(engine_error.empty() ? "no engine" : engine_error);
     io::GltfFile file = io::load_gltf(item.input, o.refs);
+    // The input's own glTF errors: refused under --strict, else a warning (the output keeps
+    // what reparam does not rewrite).
+    const std::vector<io::RuleIssue> issues = io::check_rules(file);
+    report["input_validation"] = {{"errors", issues.size()}, {"codes", io::count_by_code(issues)}};
+    if (!issues.empty() && o.strict) throw InputError(item.input, io::describe_issues(issues) + ": refused (--strict)");
     report["input_bytes"] = io::asset_bytes(item.input, o.refs).total();  // JSON, buffers and images
     auto r = reparam(file, *engine, o.reparam);
+    if (!issues.empty()) r["warnings"].push_back("the input has " + io::describe_issues(issues));
     if (o.astc) r["gpu_textures"] = io::gpu_textures_report(io::attach_astc_textures(file, *o.astc), *o.astc);
     // Files of an earlier run's output that this one no longer names (a KTX2 copy, when
     // --texture-format changed) are removed once the new output is in place.

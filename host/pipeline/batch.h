@@ -82,6 +82,9 @@ struct BatchOptions {
   bool isolate = true;   // false: run in this process, one asset after another (tests)
   std::string version;   // recorded in the reports (and part of the options compared)
   io::RefPolicy refs;    // --allow-outside-refs, for loading and hashing inputs (recorded)
+  // --strict: an input that breaks the glTF rules checked on load (io/gltf_rules.h) fails
+  // instead of carrying a warning (recorded when set).
+  bool strict = false;
 };
 
 // The options as recorded in each report and compared on resume.

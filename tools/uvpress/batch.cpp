@@ -125,6 +125,7 @@ void add_batch(CLI::App& app, Globals& g) {
       o.reparam.block = block_alignment(a->gpu, o.reparam.block, a->block_align->count() > 0);
       o.version = UVPRESS_VERSION;
       o.refs = g.refs();  // the global --allow-outside-refs, recorded in every report
+      o.strict = g.strict;
       if (!a->grid.empty()) o.eval_options.cost_grid = a->grid;
       if (a->collect) {
         g.prepare_outputs({});  // --report; DIR is read, not written

@@ -25,12 +25,18 @@ struct Globals {
   std::string report;           // --report FILE.json
   bool validation = false;      // --vulkan-validation, or UVPRESS_VALIDATION=1
   bool allow_outside_refs = false;  // --allow-outside-refs: trusted layouts only
+  bool strict = false;              // --strict: refuse inputs that break the glTF rules checked on load
   std::function<int()> action;  // set by the chosen subcommand's callback
 
   // The engine for --device; prints the choice in verbose mode.
   std::unique_ptr<engine::Engine> make_engine() const;
   // What an input's buffer and image URIs may name (every load_gltf takes it).
   io::RefPolicy refs() const { return {allow_outside_refs}; }
+  // A glTF input: io::load_gltf under refs(), then the Khronos rules that matter here
+  // (io/gltf_rules.h). An input that breaks them is one warning line with the count (the
+  // output keeps what it does not touch), or with --strict an InputError. `checked`, when
+  // given, receives the report's {"errors": n, "codes": {code: n}}.
+  io::GltfFile load_input(const std::string& path, nlohmann::ordered_json* checked = nullptr) const;
   // Before any work: every output file (and --report) and output folder created-for and
   // checked writable (io::prepare_output_file / prepare_output_folder). Throws InputError.
   void prepare_outputs(const std::vector<std::string>& files, const std::vector<std::string>& folders = {}) const;

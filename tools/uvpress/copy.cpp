@@ -26,7 +26,8 @@ void add_copy(CLI::App& app, Globals& g) {
       if (!io::is_gltf_output_path(*output))
         throw InputError(*output, "unsupported output format (use .gltf or .glb)");
       g.prepare_outputs({*output});
-      io::GltfFile file = io::load_gltf(*input, g.refs());
+      nlohmann::ordered_json checked;
+      io::GltfFile file = g.load_input(*input, &checked);
       io::build_asset(file);  // reject what later stages could not read
       g.stage("load", t0);
       std::string gpu_summary;
@@ -41,7 +42,8 @@ void add_copy(CLI::App& app, Globals& g) {
       const uint64_t out = io::staged_asset_bytes(writer, *output).total();
       const auto costs = pipeline::image_costs(file);
       nlohmann::ordered_json report = {{"input", *input}, {"output", *output}, {"input_bytes", in}, {"output_bytes", out},
-                                       {"textures", costs["textures"]}, {"texture_totals", costs["totals"]}};
+                                       {"textures", costs["textures"]}, {"texture_totals", costs["totals"]},
+                                       {"input_validation", checked}};
       if (!gpu_textures.is_null()) report["gpu_textures"] = gpu_textures;
       g.write_report(report, writer);
       writer.commit();

@@ -124,10 +124,10 @@ void add_eval(CLI::App& app, Globals& g) {
     g.action = [&g, a] {
       auto t0 = std::chrono::steady_clock::now();
       g.prepare_outputs({}, {a->html});
-      io::GltfFile ref = io::load_gltf(a->reference, g.refs());
+      io::GltfFile ref = g.load_input(a->reference);
       std::vector<io::GltfFile> files;
       files.reserve(a->others.size());
-      for (const auto& f : a->others) files.push_back(io::load_gltf(f, g.refs()));
+      for (const auto& f : a->others) files.push_back(g.load_input(f));
       std::vector<eval::LayoutInput> others;
       for (size_t k = 0; k < files.size(); ++k) {
         std::string name = std::filesystem::path(a->others[k]).stem().string();

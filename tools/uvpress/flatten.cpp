@@ -101,8 +101,8 @@ PrimitiveCharts split_primitive(const io::Primitive& prim) {
 void flatten_gltf(const Globals& g, const std::string& input, const std::string& output, io::AtomicWriter& writer,
                   const flatten::Options& o,
                   std::vector<Chart>& charts, std::vector<std::string>& uv_sets, size_t& overlaps_new,
-                  std::chrono::steady_clock::time_point& t0) {
-  io::GltfFile file = io::load_gltf(input, g.refs());
+                  std::chrono::steady_clock::time_point& t0, nlohmann::ordered_json& checked) {
+  io::GltfFile file = g.load_input(input, &checked);
   io::Asset asset = io::build_asset(file);
   g.stage("load", t0);
   if (asset.primitives.empty()) throw InputError(input, "no triangle primitives to flatten");
@@ -378,7 +378,8 @@ void add_flatten(CLI::App& app, Globals& g) {
       // The output and its report (and --log) appear together: one that cannot be written
       // leaves none of them.
       io::AtomicWriter writer;
-      if (gltf_in) flatten_gltf(g, a->input, a->output, writer, o, charts, uv_sets, overlaps_new, t0);
+      nlohmann::ordered_json checked;    // glTF: the input's validation on load
+      if (gltf_in) flatten_gltf(g, a->input, a->output, writer, o, charts, uv_sets, overlaps_new, t0, checked);
       else flatten_mesh(g, a->input, a->output, writer, o, charts, t0, mesh_note);
 
       if (!a->log.empty()) {
@@ -448,6 +449,7 @@ void add_flatten(CLI::App& app, Globals& g) {
         report["charts_skipped"] = skipped;
         report["holes_filled"] = filled;
         report["overlaps_new"] = overlaps_new;
+        report["input_validation"] = checked;
       }
       // What a person reads: triangles, charts, time, flips, what was skipped and the UV
       // set written. The solver's own figures (eta, E_c) are in --report and -v.

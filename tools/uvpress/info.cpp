@@ -17,7 +17,7 @@ void add_info(CLI::App& app, Globals& g) {
     g.action = [&g, input] {
       auto t0 = std::chrono::steady_clock::now();
       g.prepare_outputs({});  // --report
-      io::GltfFile file = io::load_gltf(*input, g.refs());
+      io::GltfFile file = g.load_input(*input);
       g.stage("load", t0);
       auto info = pipeline::inspect(file);
       g.stage("inspect", t0);

@@ -4,7 +4,9 @@
 
 #include "core/error.h"
 #include "core/report_schema.h"
+#include "io/asset.h"
 #include "io/atomic_file.h"
+#include "io/gltf_rules.h"
 
 #include <csignal>
 #include <cstdio>
@@ -24,6 +26,22 @@ std::unique_ptr<engine::Engine> Globals::make_engine() const {
     std::fprintf(stderr, "device: %s %s (%s)\n", d.backend.c_str(), d.name.c_str(), d.type.c_str());
   }
   return e;
+}
+
+io::GltfFile Globals::load_input(const std::string& path, nlohmann::ordered_json* checked) const {
+  io::GltfFile file = io::load_gltf(path, refs());
+  const std::vector<io::RuleIssue> issues = io::check_rules(file);
+  if (checked) {
+    *checked = {{"errors", issues.size()}, {"codes", nlohmann::ordered_json::object()}};
+    for (const auto& [code, n] : io::count_by_code(issues)) (*checked)["codes"][code] = n;
+  }
+  if (issues.empty()) return file;
+  // An input the later stages cannot read fails with that reason alone (one error line).
+  io::build_asset(file);
+  if (strict) throw InputError(path, io::describe_issues(issues) + ": refused (--strict)");
+  std::fprintf(stderr, "uvpress: %s: warning: %s; what uvpress does not rewrite keeps them (--strict refuses such inputs)\n",
+               path.c_str(), io::describe_issues(issues).c_str());
+  return file;
 }
 
 void Globals::prepare_outputs(const std::vector<std::string>& files, const std::vector<std::string>& folders) const {
@@ -92,6 +110,8 @@ int main(int argc, char** argv) {
   app.add_flag("--vulkan-validation", g.validation, "Enable the Khronos validation layer (or UVPRESS_VALIDATION=1)");
   app.add_flag("--allow-outside-refs", g.allow_outside_refs,
                "Let buffer and image URIs name files outside the asset's folder (trusted inputs only)");
+  app.add_flag("--strict", g.strict,
+               "Refuse a glTF input that breaks the Khronos validator's buffer, accessor and mesh rules (default: warn)");
   cli::add_reparam(app, g);
   cli::add_info(app, g);
   cli::add_copy(app, g);
@@ -104,7 +124,7 @@ int main(int argc, char** argv) {
   // `uvpress --help`: every subcommand's help names them too.
   for (CLI::App* sub : app.get_subcommands({}))
     sub->footer("Global options (before or after the command): -v/--verbose, --report FILE.json, "
-                "--device auto|gpu|lavapipe|cpu, --vulkan-validation, --allow-outside-refs (see uvpress --help)");
+                "--device auto|gpu|lavapipe|cpu, --vulkan-validation, --allow-outside-refs, --strict (see uvpress --help)");
 
   try {
     app.parse(argc, argv);

@@ -65,7 +65,8 @@ void add_reparam(CLI::App& app, Globals& g) {
       auto t0 = std::chrono::steady_clock::now();
       if (!io::is_gltf_output_path(*output)) throw InputError(*output, "unsupported output format (use .gltf or .glb)");
       g.prepare_outputs({*output});  // before the work, not after it
-      io::GltfFile file = io::load_gltf(*input, g.refs());
+      nlohmann::ordered_json checked;
+      io::GltfFile file = g.load_input(*input, &checked);
       // The input as it is before anything is written (the output may replace it in place).
       const io::AssetBytes in_files = io::asset_bytes(*input, g.refs());
       const nlohmann::ordered_json old_costs = pipeline::image_costs(file)["totals"];
@@ -137,6 +138,7 @@ void add_reparam(CLI::App& app, Globals& g) {
                                     {"output_bytes", out_bytes},
                                     {"input_files", {{"file", in_files.file}, {"buffers", in_files.buffers}, {"images", in_files.images}, {"ktx2", in_files.ktx2}}},
                                     {"output_files", {{"file", out_files.file}, {"buffers", out_files.buffers}, {"images", out_files.images}, {"ktx2", out_files.ktx2}}}};
+      out["input_validation"] = checked;
       for (auto& [key, value] : report.items())
         if (!out.contains(key)) out[key] = value;
       out["seconds"] = seconds;
