@@ -69,6 +69,18 @@ std::string invalid_reason(const Result& r) {
   return "";
 }
 
+ChartResult flatten_chart(const Mesh& chart, const Options& options) {
+  const FilledHoles filled = fill_holes(chart.positions, chart.triangles);
+  Mesh closed;
+  closed.positions = filled.positions;
+  closed.triangles = filled.triangles;
+  ChartResult out;
+  out.result = flatten(closed, options);
+  out.result.uv.resize(2 * chart.vertex_count());  // the temporary vertices go
+  out.filled_holes = filled.filled_loops;
+  return out;
+}
+
 std::vector<Method> all_methods() { return {Method::Progressive, Method::Slim, Method::Cm, Method::PCm, Method::Hybrid}; }
 
 size_t count_flips(const std::vector<uint32_t>& tris, const std::vector<double>& uv) {

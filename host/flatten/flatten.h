@@ -117,6 +117,18 @@ struct Result {
 // Throws FlattenError when the mesh is not a single disk (see disk_topology.h).
 Result flatten(const Mesh& mesh, const Options& options = {});
 
+// One chart of a real asset (a glTF chart has holes: eyes, mouths, cut-outs): every
+// boundary loop but the longest closed for the solve by a fan to a temporary vertex at its
+// centroid (disk_topology.h fill_holes), flattened, the temporary vertices dropped again
+// (`result.uv` has 2 values per vertex of `chart`). Throws FlattenError when the chart is
+// no disk even then (a handle, a non-manifold vertex, a degenerate Tutte embedding); a
+// solve that fails is in the result (invalid_reason says so).
+struct ChartResult {
+  Result result;
+  size_t filled_holes = 0;  // boundary loops closed for the solve
+};
+ChartResult flatten_chart(const Mesh& chart, const Options& options = {});
+
 // Why `r` is not a valid map to write, in one phrase for an error line ("" when it is one):
 // a failed solve (r.failure), flipped triangles (r.flips), or non-finite UVs. A stall at
 // the floor or the iteration limit on a flip-free, finite map is a valid map.

@@ -22,6 +22,7 @@
 #include "perceptual/outline_fit.h"
 #include "perceptual/rate_allocation.h"
 #include "pipeline/injective_fit.h"
+#include "pipeline/isometric_charts.h"
 #include "pipeline/texture_costs.h"
 #include "perceptual/triangle_view.h"
 
@@ -240,6 +241,8 @@ struct Candidate {
   // The automatic gutter one mip level cleaner (atlas::mip_safe_gutter down to a side of 32
   // texels, at most 32: twice as wide where the cap allows).
   bool wide_gutter = false;
+  // Every chart flattened at one density instead (ReparamOptions::isometric).
+  bool isometric = false;
 };
 
 // What one candidate came to, in the output file it was written into.
@@ -322,9 +325,62 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
     }
     std::vector<std::vector<double>> new_uv_of(charts.size());
     std::vector<std::string> overlapped;  // charts fallen back to their input shape, with their new pairs
+    // Packing units: charts that share source texels move together, in their input
+    // arrangement, unless the isometric layout gives each of them texels of its own.
+    std::vector<std::vector<uint32_t>> units = P.units;
+    std::vector<uint32_t> unit_of_chart = P.unit_of_chart;
+    std::vector<char> flattened(charts.size(), 0);  // isometric: charts that took their flattened shape
+    if (cand.isometric) {
+      std::vector<ChartGeometry> geometry(charts.size());
+      for (size_t c = 0; c < charts.size(); ++c) {
+        const Chart& ch = charts[c];
+        const io::Primitive& prim = asset.primitives[size_t(L.uv_sets[ch.uv_set].primitive)];
+        ChartGeometry& g = geometry[c];
+        // A folded chart (rigid) is flattened too: the solve does not start from its UVs, and
+        // unfolds it.
+        g.triangles = &ch.local, g.uv = &ch.uv;
+        // Positions per local vertex (the welded UV vertex's position, any of its corners).
+        g.positions.assign(3 * ch.vertices.size(), 0.0);
+        std::map<uint32_t, uint32_t> local_of;
+        for (uint32_t v = 0; v < ch.vertices.size(); ++v) local_of[ch.vertices[v]] = v;
+        for (uint32_t t : ch.triangles)
+          for (int k = 0; k < 3; ++k) {
+            const uint32_t pv = prim.indices[3 * size_t(t) + size_t(k)];
+            const uint32_t l = local_of.at(P.welded_of_vertex[ch.uv_set][pv]);
+            for (int d = 0; d < 3; ++d) g.positions[3 * size_t(l) + size_t(d)] = prim.positions[3 * size_t(pv) + size_t(d)];
+          }
+      }
+      const std::string stage = "flatten (layout " + std::to_string(li) + ")";
+      if (progress) progress(stage, 0, 1);
+      IsometricCharts iso = isometric_charts(geometry, o.flatten);
+      if (progress) progress(stage, 1, 1);
+      new_uv_of = std::move(iso.uv);
+      flattened = iso.flattened;
+      for (const std::string& k : iso.kept)
+        warnings.push_back("layout " + std::to_string(li) + " " + k + " (input shape kept)");
+      // A flattened chart is a unit of its own; the others keep their grouping.
+      units.clear();
+      std::map<uint32_t, uint32_t> unit_of_group;
+      for (uint32_t c = 0; c < charts.size(); ++c) {
+        uint32_t u;
+        if (iso.flattened[c]) {
+          u = uint32_t(units.size()), units.emplace_back();
+        } else {
+          auto [it, fresh] = unit_of_group.emplace(P.unit_of_chart[c], uint32_t(units.size()));
+          if (fresh) units.emplace_back();
+          u = it->second;
+        }
+        units[u].push_back(c), unit_of_chart[c] = u;
+      }
+      const size_t flat = size_t(std::count(iso.flattened.begin(), iso.flattened.end(), 1));
+      jl["isometric"] = {{"charts_flattened", flat},
+                         {"charts_kept", charts.size() - flat},
+                         {"holes_filled", iso.filled_holes},
+                         {"texels_per_area", iso.texels_per_area}};
+    }
     const std::string mesh_stage = "mesh stage (" + cand.name + ", layout " + std::to_string(li) + ")";
-    if (progress && cand.reshape) progress(mesh_stage, 0, charts.size());
-    for (size_t c = 0; c < charts.size(); ++c) {
+    if (progress && cand.reshape && !cand.isometric) progress(mesh_stage, 0, charts.size());
+    for (size_t c = 0; c < charts.size() && !cand.isometric; ++c) {
       const Chart& ch = charts[c];
       if (!cand.reshape || P.results[ch.uv_set].empty() || ch.rigid || ch.shared) {
         new_uv_of[c] = ch.uv;
@@ -385,12 +441,13 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
                          list + " (new overlapping triangle pairs) ran over " + (overlapped.size() == 1 ? "itself" : "themselves") +
                          " in the mesh stage: kept at the input shape");
     }
-    // No triangle may flip relative to the input.
+    // No triangle may flip relative to the input (a flattened chart: relative to the
+    // chart's orientation, which unfolds a folded input).
     for (size_t c = 0; c < charts.size(); ++c) {
       const Chart& ch = charts[c];
       for (size_t t = 0; t < ch.triangles.size(); ++t) {
         const uint32_t* l = &ch.local[3 * t];
-        double before = signed_area(&ch.uv[2 * l[0]], &ch.uv[2 * l[1]], &ch.uv[2 * l[2]]);
+        double before = flattened[c] ? 1.0 : signed_area(&ch.uv[2 * l[0]], &ch.uv[2 * l[1]], &ch.uv[2 * l[2]]);
         double after = signed_area(&new_uv_of[c][2 * l[0]], &new_uv_of[c][2 * l[1]], &new_uv_of[c][2 * l[2]]);
         if ((before > 0 && after <= 0) || (before < 0 && after >= 0)) ++layout_flips;
       }
@@ -429,9 +486,9 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
 
     // Pack into the budget (eq. 20-21).
     t0.restart();
-    std::vector<atlas::ChartShape> shapes(P.units.size());
-    for (size_t u = 0; u < P.units.size(); ++u)
-      for (uint32_t c : P.units[u]) {
+    std::vector<atlas::ChartShape> shapes(units.size());
+    for (size_t u = 0; u < units.size(); ++u)
+      for (uint32_t c : units[u]) {
         const uint32_t base = uint32_t(shapes[u].points.size() / 2);
         shapes[u].points.insert(shapes[u].points.end(), new_uv_of[c].begin(), new_uv_of[c].end());
         for (uint32_t l : charts[c].local) shapes[u].triangles.push_back(base + l);
@@ -458,11 +515,11 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
     // levels at its edge, then blend in what they blend in the input.
     const uint32_t copy_ring = gutter / 2;
     const uint32_t edge_ring = std::min(1u, copy_ring);  // what must fit inside the image
-    std::vector<char> unit_exact(P.units.size(), 0);
+    std::vector<char> unit_exact(units.size(), 0);
     if (o.exact_texels && cand.exact)
-      for (size_t u = 0; u < P.units.size(); ++u) {
+      for (size_t u = 0; u < units.size(); ++u) {
         unit_exact[u] = 1;
-        for (uint32_t c : P.units[u]) unit_exact[u] &= char(new_uv_of[c] == charts[c].uv);
+        for (uint32_t c : units[u]) unit_exact[u] &= char(new_uv_of[c] == charts[c].uv);
         shapes[u].snap = unit_exact[u] != 0;  // so that the atlas chosen has room for whole-texel origins
       }
     // The image edges: half the gutter on an axis a sampler repeats across, else none, but
@@ -471,10 +528,10 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
     // its ring lies outside the source too).
     const auto repeats = repeating_axes(asset, L);
     uint32_t ring = 0;
-    for (size_t u = 0; u < P.units.size(); ++u) {
+    for (size_t u = 0; u < units.size(); ++u) {
       if (!unit_exact[u]) continue;
       double lo[2] = {W, H}, hi[2] = {0, 0};
-      for (uint32_t c : P.units[u])
+      for (uint32_t c : units[u])
         for (size_t k = 0; k < charts[c].uv.size(); k += 2)
           for (int a = 0; a < 2; ++a) lo[a] = std::min(lo[a], charts[c].uv[k + a]), hi[a] = std::max(hi[a], charts[c].uv[k + a]);
       if (lo[0] > 0.5 || lo[1] > 0.5 || hi[0] < W - 0.5 || hi[1] < H - 0.5) ring = edge_ring;
@@ -489,7 +546,7 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
     // scale per axis is Rw / W, Rh / H), the units' points scaled to that grid and packed
     // with whole-texel translations into the same atlas; a little smaller when snapping
     // does not fit.
-    std::vector<std::array<double, 2>> unit_factor(P.units.size(), {1.0, 1.0});
+    std::vector<std::array<double, 2>> unit_factor(units.size(), {1.0, 1.0});
     uint32_t Rw = 0, Rh = 0;
     if (std::find(unit_exact.begin(), unit_exact.end(), 1) != unit_exact.end()) {
       bool placed = false;
@@ -504,7 +561,7 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
         }
         Rw = std::max(1u, uint32_t(std::floor(W * s + 1e-9))), Rh = std::max(1u, uint32_t(std::floor(H * s + 1e-9)));
         std::vector<atlas::ChartShape> snapped = shapes;
-        for (size_t u = 0; u < P.units.size(); ++u) {
+        for (size_t u = 0; u < units.size(); ++u) {
           if (!unit_exact[u]) continue;
           unit_factor[u] = {Rw / W / s, Rh / H / s};
           for (size_t k = 0; k < snapped[u].points.size(); k += 2)
@@ -527,8 +584,8 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
     for (size_t si = 0; si < L.uv_sets.size(); ++si) welded_new[si].assign(2 * P.welded_count[si], 0.0f);
     for (size_t c = 0; c < charts.size(); ++c)
       for (size_t v = 0; v < charts[c].vertices.size(); ++v) {
-        const auto& f = unit_factor[P.unit_of_chart[c]];
-        auto uv = packing.map_uv(P.unit_of_chart[c], f[0] * new_uv_of[c][2 * v], f[1] * new_uv_of[c][2 * v + 1]);
+        const auto& f = unit_factor[unit_of_chart[c]];
+        auto uv = packing.map_uv(unit_of_chart[c], f[0] * new_uv_of[c][2 * v], f[1] * new_uv_of[c][2 * v + 1]);
         welded_new[charts[c].uv_set][2 * charts[c].vertices[v]] = float(uv[0]);
         welded_new[charts[c].uv_set][2 * charts[c].vertices[v] + 1] = float(uv[1]);
       }
@@ -619,7 +676,7 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
       if (copies) {
         const Image resized = Rw == source.width && Rh == source.height ? source : eval::resize_lanczos3(source, Rw, Rh, false);
         std::vector<uint8_t>& known = coverage.coverage;  // the bake's texels, then the copies'
-        for (size_t u = 0; u < P.units.size(); ++u)
+        for (size_t u = 0; u < units.size(); ++u)
           if (unit_exact[u]) copied += atlas::copy_chart_texels(resized, shapes[u], packing, u, copy_ring, baked, &known);
         // The gutter filled again from what is now at the charts' edges: the copies (and
         // their ring of the source's own neighbours), not the bake they replaced.
@@ -657,7 +714,7 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
     jl["charts"] = charts.size();
     jl["rigid_charts"] = P.rigid;
     jl["shared_texel_charts"] = P.shared_charts;  // packed with the charts they share texels with, unreshaped
-    jl["packing_units"] = P.units.size();
+    jl["packing_units"] = units.size();
     jl["exact_units"] = size_t(std::count(unit_exact.begin(), unit_exact.end(), 1));  // texels copied, not resampled
     jl["exact_texels"] = exact_texels;
     jl["atlas"] = {packing.width, packing.height};
@@ -744,7 +801,7 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
     P.W = W, P.H = H;
     // The uniform scale a plain resize to the requested cost applies (rate control's yardstick).
     double rate_scale = 0;
-    if (o.optimize && o.rate_control && o.max_gmsd <= 0) {
+    if (o.optimize && !o.isometric && o.rate_control && o.max_gmsd <= 0) {
       const double c = o.size > 0 ? double(o.size) * o.size * std::min(W, H) / std::max(W, H) / (W * H) : o.cost;
       rate_scale = std::sqrt(std::min(1.0, c));
     }
@@ -810,7 +867,7 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
         if (ch.uv_set == si && !ch.rigid && !ch.shared) which.insert(which.end(), ch.triangles.begin(), ch.triangles.end());
       std::sort(which.begin(), which.end());
       // Kept per triangle (the candidates derive their targets from it).
-      if (o.optimize && !which.empty()) {
+      if (o.optimize && !o.isometric && !which.empty()) {
         Stopwatch t0;
         perceptual::TriangleViewInput in{prim.positions.data(), prim.vertex_count(), prim.indices.data(),
                                          prim.triangle_count(), uv.data(), driver.width, driver.height};
@@ -939,6 +996,12 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
     }
   }
   if (!reshape || (o.max_gmsd <= 0 && o.candidates)) plans.push_back({"repack", false, 1.0});
+  if (o.isometric) {  // flatten --assign: that layout alone
+    plans.clear();
+    Candidate iso{"isometric", true, 0.0};
+    iso.isometric = true;
+    plans.push_back(iso);
+  }
   // Scored as written against the input, the input's layout and 20 views set up once.
   const bool scoring = !prepared.empty() && (plans.size() > 1 || (o.max_gmsd <= 0 && (o.guard || o.least_squares_bake)));
   std::unique_ptr<eval::AsWrittenScorer> scorer;
@@ -1177,7 +1240,12 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
   report["triangles_optimized"] = optimized;
   report["triangles_infeasible"] = infeasible;
   report["stages"] = stages;
-  report["warnings"] = warnings;
+  // Each warning once (a layout built again for the least-squares or wide-gutter variant
+  // repeats its own), in the order first given.
+  json unique = json::array();
+  for (const auto& w : warnings)
+    if (std::find(unique.begin(), unique.end(), w) == unique.end()) unique.push_back(w);
+  report["warnings"] = unique;
   report["seconds"] = t_start.seconds();
   return report;
 }

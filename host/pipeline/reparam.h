@@ -7,6 +7,7 @@
 
 #include "engine.h"
 #include "eval/eval.h"
+#include "flatten/flatten.h"
 #include "io/gltf_io.h"
 #include "perceptual/triangle_stage.h"
 
@@ -71,6 +72,14 @@ struct ReparamOptions {
   // what a layout does to them.
   eval::Shading score_shading = eval::Shading::Auto;
   perceptual::TriangleStageOptions triangle;
+  // `flatten --assign`: one layout, the isometric one (pipeline/isometric_charts.h) instead
+  // of the triangle stage's targets: every chart that can be flattened (by `flatten`'s
+  // options), charts sharing source texels each given texels of their own, at one texel
+  // density; then packed into --cost and re-baked like any layout, scored as written when
+  // `guard` or the scorer allows (the guard itself is not applied: the user asked for these
+  // UVs). No triangle stage, no other candidates.
+  bool isometric = false;
+  flatten::Options flatten;
 };
 
 // Progress: stage name, done, total (for a stderr bar on long runs).

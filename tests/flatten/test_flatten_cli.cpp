@@ -4,7 +4,10 @@
 #include <catch2/catch.hpp>
 
 #include "flatten/flatten.h"
+#include "io/asset.h"
+#include "io/gltf_append.h"
 #include "io/gltf_io.h"
+#include "io/vertex_attribute.h"
 #include "io/mesh_io.h"
 #include "pipeline/demo_asset.h"
 #include "support.h"
@@ -194,11 +197,17 @@ TEST_CASE("flatten CLI: glTF charts with holes flatten, a chart that cannot is s
     REQUIRE(r.exit_code == 0);
     CHECK_THAT(r.out, Catch::Contains(" 0 flips") && Catch::Contains("new UV set TEXCOORD_"));
     CHECK_THAT(r.out, !Catch::Contains("eta") && !Catch::Contains("E_c"));  // solver jargon stays in --report
-    for (const auto& line : r.err_lines())
+    size_t skipped_lines = 0;
+    for (const auto& line : r.err_lines()) {
+      // Fox's own validator errors (strided animation and skin accessors): one line, kept.
+      if (std::string(name) == "Fox" && line.find(": warning: 127 glTF validation errors") != std::string::npos) continue;
       CHECK_THAT(line, Catch::Matches(".*: warning: mesh [0-9]+ primitive [0-9]+ chart [0-9]+: skipped: .*"));
+      ++skipped_lines;
+    }
     auto j = nlohmann::json::parse(slurp(report));
     CHECK(j["flips"] == 0);
-    CHECK(j["charts_skipped"].get<size_t>() == r.err_lines().size());
+    CHECK(j["charts_skipped"].get<size_t>() == skipped_lines);
+    CHECK(j["input_validation"]["errors"] == (std::string(name) == "Fox" ? 127 : 0));
     auto file = io::load_gltf(out.string());
     for (const auto& set : j["uv_sets_written"]) {
       size_t users = 0;
@@ -255,4 +264,127 @@ TEST_CASE("flatten keeps an OBJ's materials and normals, and says that its UVs w
   r = run_uvpress("flatten " + quoted(dir / "plain.obj") + " -o " + quoted(dir / "plain-flat.obj"));
   REQUIRE(r.exit_code == 0);
   CHECK_THAT(r.out, !Catch::Contains("replaced") && !Catch::Contains("not kept"));
+}
+
+namespace {
+
+// Per triangle: UV area over 3-D area, and their coefficient of variation (0: one density).
+double density_spread(const std::vector<float>& positions, const std::vector<float>& uv, const std::vector<uint32_t>& idx) {
+  std::vector<double> r;
+  for (size_t t = 0; t + 2 < idx.size(); t += 3) {
+    const float* a = &positions[3 * size_t(idx[t])];
+    const float* b = &positions[3 * size_t(idx[t + 1])];
+    const float* c = &positions[3 * size_t(idx[t + 2])];
+    const double e1[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, e2[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+    const double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+    const double area = 0.5 * std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    const float* p = &uv[2 * size_t(idx[t])];
+    const float* q = &uv[2 * size_t(idx[t + 1])];
+    const float* s = &uv[2 * size_t(idx[t + 2])];
+    const double uv_area = 0.5 * std::abs(double(q[0] - p[0]) * (s[1] - p[1]) - double(s[0] - p[0]) * (q[1] - p[1]));
+    if (area > 0) r.push_back(uv_area / area);
+  }
+  double mean = 0, var = 0;
+  for (double x : r) mean += x / double(r.size());
+  for (double x : r) var += (x - mean) * (x - mean) / double(r.size());
+  return std::sqrt(var) / mean;
+}
+
+}  // namespace
+
+// --assign: the materials sample the flattened UVs and the texture is re-baked into them. An
+// asset whose UVs squeeze its left side 9x more than its right gets one texel density over
+// its surface, and its texture still shows what it showed (scored on screen as written).
+TEST_CASE("flatten --assign: the materials use the flattened UVs, the texture re-baked into them", "[flatten][cli][assign]") {
+  test::Scratch dir("flatten-assign");
+  io::GltfFile demo = pipeline::make_demo_asset({16, 256});
+  auto& prim = demo.model.meshes[0].primitives[0];
+  std::vector<float> uv = io::vertex_attribute(demo, 0, 0, "TEXCOORD_0", 2);
+  for (size_t i = 0; i < uv.size(); i += 2) uv[i] = 0.2f * uv[i] + 0.8f * uv[i] * uv[i];  // du'/du from 0.2 to 1.8
+  prim.attributes["TEXCOORD_0"] = io::append_float_accessor(demo.model, uv, TINYGLTF_TYPE_VEC2);
+  const auto in = dir / "squeezed.glb", out = dir / "flat.glb", report = dir / "flat.json";
+  io::save_gltf(demo, in.string());
+  const std::vector<float> positions = io::vertex_attribute(demo, 0, 0, "POSITION", 3);
+  const io::Asset before = io::build_asset(demo);
+  const double spread_in = density_spread(positions, uv, before.primitives[0].indices);
+
+  auto r = run_uvpress("flatten " + quoted(in) + " -o " + quoted(out) + " --assign --device cpu --report " + quoted(report));
+  INFO("stdout: " << r.out << "\nstderr: " << r.err);
+  REQUIRE(r.exit_code == 0);
+  CHECK(r.err.empty());
+  CHECK_THAT(r.out, Catch::Contains("1 charts flattened") && Catch::Contains("re-baked into TEXCOORD_0") &&
+                        Catch::Contains("on screen q"));
+  CHECK(test::validate_gltf(out)["numErrors"] == 0);
+  const auto j = nlohmann::json::parse(slurp(report));
+  CHECK(j["flips"] == 0);
+  CHECK(j["overlaps_new"] == 0);
+  CHECK(j["layouts"][0]["isometric"]["charts_flattened"] == 1);
+  CHECK(j["cost_ratio"].get<double>() == Approx(1.0).margin(0.02));
+
+  // The material's texCoord set is the flattened one: one density where the input had a
+  // 9:1 squeeze, and the image was re-baked (a repointed texture would scramble it: q > 0.05).
+  const io::GltfFile result = io::load_gltf(out.string());
+  const io::Asset after = io::build_asset(result);
+  const int tex_coord = result.model.materials[0].pbrMetallicRoughness.baseColorTexture.texCoord;
+  const std::vector<float> new_uv = io::vertex_attribute(result, 0, 0, "TEXCOORD_" + std::to_string(tex_coord), 2);
+  const double spread_out = density_spread(io::vertex_attribute(result, 0, 0, "POSITION", 3), new_uv, after.primitives[0].indices);
+  CHECK(spread_in > 0.3);
+  CHECK(spread_out < 0.2 * spread_in);
+  CHECK(result.image_bytes[0] != demo.image_bytes[0]);
+  // Evening the density out moves texels from the over-sampled right to the under-sampled
+  // left: the right loses detail the input had, and q says so (not a re-bake error: below).
+  CHECK(j["q"].get<double>() > 0);
+
+  // The sheet as generated (UVs already near one density): flattened, turned back to its
+  // input orientation and packed, its charts hold a share of the image's texels, and the
+  // re-bake loses no more than the plain resize of the input to that share (eval's input
+  // curve there; 0.0136 against 0.0139 at 512^2). A texture left in the old layout, or
+  // re-baked through the wrong triangles, scores several times that.
+  const auto plain = dir / "plain.glb", plain_out = dir / "plain-flat.glb", plain_report = dir / "plain-flat.json";
+  io::save_gltf(pipeline::make_demo_asset({16, 256}), plain.string());
+  r = run_uvpress("flatten " + quoted(plain) + " -o " + quoted(plain_out) + " --assign --device cpu --report " + quoted(plain_report));
+  REQUIRE(r.exit_code == 0);
+  const auto jp = nlohmann::json::parse(slurp(plain_report));
+  const double share = jp["layouts"][0]["chart_cost_ratio"].get<double>();
+  CHECK(share > 0.85);  // turned back to the input's orientation, the sheet fills its box
+  char grid[32];
+  std::snprintf(grid, sizeof grid, "%.4f", share);
+  r = run_uvpress("eval " + quoted(plain) + " --cost-grid " + grid + " --device cpu --report " + quoted(dir / "eval.json"));
+  REQUIRE(r.exit_code == 0);
+  const double q_resize = nlohmann::json::parse(slurp(dir / "eval.json"))["layouts"][0]["curve"][0]["q"].get<double>();
+  INFO("q flattened " << jp["q"].get<double>() << ", q resized to " << share << " of the texels " << q_resize);
+  CHECK(jp["q"].get<double>() < 1.25 * q_resize);
+}
+
+TEST_CASE("flatten --assign on Duck: charts that share texels get their own, the file stays valid", "[flatten][cli][assign][shared]") {
+  auto shared = test::shared_dir();
+  if (!shared) UVPRESS_SKIP("no ../shared: Duck is not here");
+  test::Scratch dir("flatten-assign-duck");
+  const auto in = *shared / "assets" / "Duck" / "glTF-Binary" / "Duck.glb", out = dir / "duck.glb", report = dir / "duck.json";
+  auto r = run_uvpress("flatten " + quoted(in) + " -o " + quoted(out) + " --assign --device cpu --report " + quoted(report));
+  INFO("stdout: " << r.out << "\nstderr: " << r.err);
+  REQUIRE(r.exit_code == 0);
+  CHECK(test::validate_gltf(out)["numErrors"] == 0);
+  const auto j = nlohmann::json::parse(slurp(report));
+  const auto& iso = j["layouts"][0]["isometric"];
+  // Duck's mirrored halves share texels; flattened, each has its own.
+  CHECK(j["layouts"][0]["shared_texel_charts"].get<size_t>() > 0);
+  CHECK(iso["charts_flattened"].get<size_t>() + iso["charts_kept"].get<size_t>() == j["layouts"][0]["charts"].get<size_t>());
+  CHECK(iso["charts_flattened"].get<size_t>() >= j["layouts"][0]["shared_texel_charts"].get<size_t>());
+  // Every chart kept is named, with its reason, in a warning.
+  CHECK(r.err_lines().size() == iso["charts_kept"].get<size_t>());
+  CHECK(j["flips"] == 0);
+  CHECK(j["overlaps_new"] == 0);
+  CHECK(j["q"].is_number());
+}
+
+TEST_CASE("flatten --assign refuses what it cannot do, before any work", "[flatten][cli][assign]") {
+  test::Scratch dir("flatten-assign-errors");
+  std::ofstream(dir / "grid.obj") << grid_obj(4);
+  test::Scratch out("flatten-assign-errors-out");
+  test::check_input_error(out, "flatten " + quoted(dir / "grid.obj") + " -o " + quoted(out / "x.obj") + " --assign",
+                          dir / "grid.obj", "--assign needs a glTF input");
+  io::save_gltf(pipeline::make_demo_asset({4, 32}), (dir / "demo.glb").string());
+  test::check_input_error(out, "flatten " + quoted(dir / "demo.glb") + " -o " + quoted(out / "x.glb") + " --assign --log " + quoted(out / "l.csv"),
+                          out / "l.csv", "--log is not written with --assign");
 }

@@ -8,7 +8,14 @@
 // flipped triangles on the values as written, and for a glTF the pairs of triangles that
 // overlap in the new UVs but did not in TEXCOORD_0 (a flattened chart whose free boundary
 // runs over itself keeps its input UVs; any new overlap left fails the run).
+//
+// --assign (glTF): the materials use the flattened UVs. Each textured layout's charts are
+// flattened at one texel density (pipeline/isometric_charts.h), packed into --cost of the
+// input's texels, every texture of the layout re-baked into them (never repointed without a
+// re-bake) and the UV set the materials sample replaced: reparam's packing, re-bake and
+// checks (no new overlaps, no flips), scored on screen against the input.
 #include "cli.h"
+#include "progress.h"
 
 #include "atlas/charts.h"
 #include "atlas/uv_overlap.h"
@@ -17,10 +24,13 @@
 #include "flatten/flatten.h"
 #include "flatten/report.h"
 #include "io/asset.h"
+#include "io/asset_bytes.h"
 #include "io/atomic_file.h"
 #include "io/gltf_append.h"
 #include "io/gltf_io.h"
 #include "io/mesh_io.h"
+#include "pipeline/reparam.h"
+#include "pipeline/texture_costs.h"
 
 #include <algorithm>
 #include <cmath>
@@ -151,12 +161,9 @@ void flatten_gltf(const Globals& g, const std::string& input, const std::string&
                      chart.label.c_str(), why.c_str());
       };
       try {
-        const flatten::FilledHoles filled = flatten::fill_holes(chart.mesh.positions, chart.mesh.triangles);
-        Mesh closed;
-        closed.positions = filled.positions;
-        closed.triangles = filled.triangles;
-        chart.result = flatten::flatten(closed, o);
-        chart.filled_holes = filled.filled_loops;
+        flatten::ChartResult flat = flatten::flatten_chart(chart.mesh, o);
+        chart.result = std::move(flat.result);
+        chart.filled_holes = flat.filled_holes;
       } catch (const flatten::FlattenError& e) {
         keep_input(e.what());
       }
@@ -164,7 +171,6 @@ void flatten_gltf(const Globals& g, const std::string& input, const std::string&
         // A failed solve on a disk is a failure, not a skip: exit 1, nothing written.
         if (std::string why = flatten::invalid_reason(chart.result); !why.empty())
           throw InputError(input, chart.label + ": " + why);
-        chart.result.uv.resize(2 * chart.mesh.vertex_count());  // the temporary vertices go
         // Flip-free is not injective: a free boundary can run over itself. Such a chart
         // keeps its input UVs when it has some (without, there is no shape to keep).
         const auto overlaps = atlas::find_new_overlaps(input_uv.data(), chart.result.uv.data(),
@@ -290,6 +296,76 @@ void flatten_gltf(const Globals& g, const std::string& input, const std::string&
   g.stage("save", t0);
 }
 
+// flatten --assign: the isometric layout through reparam's packing and re-bake, staged in
+// `writer`. Returns the report; `summary` gets the line to print once it is committed.
+nlohmann::ordered_json assign_gltf(const Globals& g, const std::string& input, const std::string& output, double cost,
+                                   const flatten::Options& o, io::AtomicWriter& writer, std::string& summary) {
+  const auto t0 = std::chrono::steady_clock::now();
+  nlohmann::ordered_json checked;
+  io::GltfFile file = g.load_input(input, &checked);
+  const io::AssetBytes in_files = io::asset_bytes(input, g.refs());
+  const nlohmann::ordered_json old_costs = pipeline::image_costs(file)["totals"];
+  auto engine = g.make_engine();
+  pipeline::ReparamOptions options;
+  options.isometric = true, options.flatten = o, options.cost = cost;
+  options.optimize = false, options.candidates = false;
+  options.guard = false;  // the user asked for these UVs: scored, not replaced by a resize
+  ProgressDisplay progress(g.verbose);
+  nlohmann::ordered_json r = pipeline::reparam(file, *engine, options, std::ref(progress));
+  progress.finish();
+  io::save_gltf(file, output, {/*keep_image_names=*/true}, writer);
+  const io::AssetBytes out_files = io::staged_asset_bytes(writer, output);
+  for (const auto& w : r["warnings"]) std::fprintf(stderr, "uvpress: %s: warning: %s\n", input.c_str(), w.get<std::string>().c_str());
+  size_t flattened = 0, kept = 0, holes = 0, layouts = 0;
+  std::string sets;
+  for (const auto& l : r["layouts"]) {
+    if (!l.contains("isometric")) continue;
+    ++layouts;
+    flattened += l["isometric"]["charts_flattened"].get<size_t>(), kept += l["isometric"]["charts_kept"].get<size_t>();
+    holes += l["isometric"]["holes_filled"].get<size_t>();
+    for (const auto& s : l["uv_sets"]) {
+      const std::string name = "TEXCOORD_" + std::to_string(s["tex_coord"].get<int>());
+      if (sets.find(name) == std::string::npos) sets += (sets.empty() ? "" : ", ") + name;
+    }
+  }
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  nlohmann::ordered_json report = {{"input", input}, {"output", output}, {"assign", true}, {"seconds", seconds},
+                                   {"input_bytes", in_files.total()}, {"output_bytes", out_files.total()},
+                                   {"input_validation", checked}};
+  for (auto& [key, value] : r.items())
+    if (!report.contains(key)) report[key] = value;
+  report["seconds"] = seconds;
+  if (layouts == 0) {
+    std::string why;
+    for (const auto& l : r["layouts"])
+      if (l.contains("untouched")) why += (why.empty() ? "" : "; ") + l["untouched"].get<std::string>();
+    throw InputError(input, "--assign: no textured layout to flatten" + (why.empty() ? std::string() : ": " + why));
+  }
+  const nlohmann::ordered_json new_costs = pipeline::image_costs(file)["totals"];
+  // Packed no denser than the source where the input was densest: the ratio comes out below --cost.
+  bool at_density = false;
+  for (const auto& l : r["layouts"]) at_density |= l.value("capped_at_source_density", false);
+  char cost_text[96];
+  std::snprintf(cost_text, sizeof cost_text, "cost ratio %.3f%s", r["cost_ratio"].get<double>(),
+                at_density && r["cost_ratio"].get<double>() < 0.98 * cost ? " (capped at the source texel density)" : "");
+  std::string quality = "not scored on screen";
+  if (r["q"].is_number()) {
+    char text[96];
+    std::snprintf(text, sizeof text, "on screen q %.3g against the input", r["q"].get<double>());
+    quality = text;
+  }
+  char line[2048];
+  std::snprintf(line, sizeof line, "%s (%s, %llu texels) -> %s (%s, %llu texels): %zu charts flattened%s%s, textures re-baked into %s, %s, "
+              "%s, %.1f s",
+              input.c_str(), human_bytes(in_files.total()).c_str(), (unsigned long long)old_costs["texels"].get<uint64_t>(),
+              output.c_str(), human_bytes(out_files.total()).c_str(), (unsigned long long)new_costs["texels"].get<uint64_t>(),
+              flattened, kept ? (", " + std::to_string(kept) + " kept their UVs").c_str() : "",
+              holes ? (", " + std::to_string(holes) + " holes filled for the solve").c_str() : "", sets.c_str(),
+              cost_text, quality.c_str(), seconds);
+  summary = line;
+  return report;
+}
+
 // An OBJ keeps its materials (mtllib, usemtl) and normals (vn); `note` says what the
 // rewrite changed besides: the input's own UVs replaced, group lines not kept.
 void flatten_mesh(const Globals& g, const std::string& input, const std::string& output, io::AtomicWriter& writer,
@@ -325,6 +401,8 @@ void add_flatten(CLI::App& app, Globals& g) {
     int max_iterations = 5000;
     double bound = 60;
     int break_factorization = 0;
+    bool assign = false;
+    double cost = 1.0;
   };
   auto a = std::make_shared<Args>();
   cmd->add_option("input", a->input, "Disk mesh (.obj, .off) or glTF asset (.gltf, .glb)")->required();
@@ -337,6 +415,12 @@ void add_flatten(CLI::App& app, Globals& g) {
   cmd->add_option("--bound", a->bound, "Distortion bound K of the progressive references")
       ->capture_default_str()
       ->check(CLI::Range(1.0001, 1e12));
+  cmd->add_flag("--assign", a->assign,
+                "glTF: the materials use the flattened UVs: every textured layout's charts flattened at one texel "
+                "density, packed and its textures re-baked into them (replacing the UV set they sample)");
+  cmd->add_option("--cost", a->cost, "With --assign: texels of the re-baked textures relative to the input's")
+      ->capture_default_str()
+      ->check(CLI::Range(0.001, 4.0));
   // Test hook, not in --help: the N-th numeric factorization fails (not positive definite).
   cmd->add_option("--test-break-factorization", a->break_factorization)->group("");
   cmd->callback([&g, a] {
@@ -354,6 +438,8 @@ void add_flatten(CLI::App& app, Globals& g) {
         throw InputError(a->output, "an OBJ/OFF input is written as .obj (glTF output needs a glTF input)");
       if (gltf_in && out_ext == ".obj")
         throw InputError(a->output, "a glTF input is written as .gltf or .glb");
+      if (a->assign && !gltf_in) throw InputError(a->input, "--assign needs a glTF input (its materials use the new UVs)");
+      if (a->assign && !a->log.empty()) throw InputError(a->log, "--log is not written with --assign (see --report)");
       const std::string log_ext = io::extension_of(a->log);
       if (!a->log.empty() && log_ext != ".csv" && log_ext != ".json")
         throw InputError(a->log, "--log must name a .csv or .json file");
@@ -378,6 +464,14 @@ void add_flatten(CLI::App& app, Globals& g) {
       // The output and its report (and --log) appear together: one that cannot be written
       // leaves none of them.
       io::AtomicWriter writer;
+      if (a->assign) {
+        std::string summary;
+        const auto report = assign_gltf(g, a->input, a->output, a->cost, o, writer, summary);
+        g.write_report(report, writer);
+        writer.commit();
+        std::printf("%s\n", summary.c_str());
+        return 0;
+      }
       nlohmann::ordered_json checked;    // glTF: the input's validation on load
       if (gltf_in) flatten_gltf(g, a->input, a->output, writer, o, charts, uv_sets, overlaps_new, t0, checked);
       else flatten_mesh(g, a->input, a->output, writer, o, charts, t0, mesh_note);
