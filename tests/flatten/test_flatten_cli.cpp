@@ -197,6 +197,8 @@ TEST_CASE("flatten CLI: glTF charts with holes flatten, a chart that cannot is s
     REQUIRE(r.exit_code == 0);
     CHECK_THAT(r.out, Catch::Contains(" 0 flips") && Catch::Contains("new UV set TEXCOORD_"));
     CHECK_THAT(r.out, !Catch::Contains("eta") && !Catch::Contains("E_c"));  // solver jargon stays in --report
+    // Whole-asset bytes before and after, as every command that writes an asset says them.
+    CHECK_THAT(r.out, Catch::Matches(".*\\.gltf \\([0-9.]+ K?B\\): .* -> .*\\.glb \\([0-9.]+ K?B\\) \\(new UV set.*\n"));
     size_t skipped_lines = 0;
     for (const auto& line : r.err_lines()) {
       // Fox's own validator errors (strided animation and skin accessors): one line, kept.
@@ -207,6 +209,8 @@ TEST_CASE("flatten CLI: glTF charts with holes flatten, a chart that cannot is s
     auto j = nlohmann::json::parse(slurp(report));
     CHECK(j["flips"] == 0);
     CHECK(j["charts_skipped"].get<size_t>() == skipped_lines);
+    CHECK(j["input_bytes"].get<uint64_t>() > 0);
+    CHECK(j["output_bytes"].get<uint64_t>() > 0);
     CHECK(j["input_validation"]["errors"] == (std::string(name) == "Fox" ? 127 : 0));
     auto file = io::load_gltf(out.string());
     for (const auto& set : j["uv_sets_written"]) {

@@ -553,11 +553,24 @@ void add_flatten(CLI::App& app, Globals& g) {
       std::string sets;
       for (const auto& s : uv_sets) sets += (sets.empty() ? "" : ", ") + s;
       if (!sets.empty()) sets = " (new UV set " + sets + ")";
+      // The whole asset before (measured before anything replaces it) and after.
+      uint64_t in_bytes = 0, out_bytes = 0;
+      if (gltf_in) {
+        in_bytes = io::asset_bytes(a->input, g.refs()).total(), out_bytes = io::staged_asset_bytes(writer, a->output).total();
+      } else {
+        in_bytes = io::read_file(a->input).size();
+        for (const auto& [path, size] : writer.staged())
+          if (path == a->output) out_bytes = size;
+      }
+      report["input_bytes"] = in_bytes;
+      report["output_bytes"] = out_bytes;
       g.write_report(report, writer);
       writer.commit();
-      std::printf("%s: %zu triangles%s, %s: %d iterations, %.3f s, %zu flips%s -> %s%s\n", a->input.c_str(), faces,
+      std::printf("%s (%s): %zu triangles%s, %s: %d iterations, %.3f s, %zu flips%s -> %s (%s)%s\n", a->input.c_str(),
+                  human_bytes(in_bytes).c_str(), faces,
                   charts.size() > 1 ? (" in " + std::to_string(charts.size()) + " charts").c_str() : "", a->method.c_str(),
-                  charts.size() == 1 ? iterations : most, seconds, flips, extra.c_str(), a->output.c_str(), sets.c_str());
+                  charts.size() == 1 ? iterations : most, seconds, flips, extra.c_str(), a->output.c_str(),
+                  human_bytes(out_bytes).c_str(), sets.c_str());
       if (g.verbose) std::fprintf(stderr, "flatten: eta %d, E_c %.6f\n", eta, report["E_c"].get<double>());
       return 0;
     };
