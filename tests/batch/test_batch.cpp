@@ -377,3 +377,36 @@ TEST_CASE("batch --texture-format astc: KTX2 copies beside each output, in its h
   for (const auto& c : copies) CHECK_FALSE(test::fs::exists(c));
   CHECK(read_json(out / "asset0.report.json")["options"]["texture_format"] == "source");
 }
+
+TEST_CASE("batch --strict: an asset that breaks the glTF rules fails, without it the row carries the count", "[batch][cli][rules]") {
+  test::Scratch dir("batch-strict");
+  auto assets = write_assets(dir.path(), 1);
+  // Declared UV bounds above every value: two ACCESSOR_MAX_MISMATCH, nothing else wrong.
+  io::GltfFile bad = pipeline::make_demo_asset({6, 32});
+  const int uv = bad.model.meshes[0].primitives[0].attributes.at("TEXCOORD_0");
+  bad.model.accessors[size_t(uv)].maxValues = {1.5, 1.5};
+  io::save_gltf(bad, (dir / "in" / "bounds.glb").string());
+  write_manifest(dir / "list.txt", {"in/asset0.glb", "in/bounds.glb"});
+  auto out = dir / "out";
+  const std::string cmd = "batch --manifest " + quoted(dir / "list.txt") + " -o " + quoted(out) + " --no-optimize --device cpu";
+
+  auto r = run_uvpress(cmd);
+  INFO(r.out << r.err);
+  CHECK(r.exit_code == 0);
+  auto rep = read_json(out / "bounds.report.json");
+  CHECK(rep["status"] == "ok");
+  CHECK(rep["input_validation"]["errors"] == 2);
+  CHECK(rep["input_validation"]["codes"]["ACCESSOR_MAX_MISMATCH"] == 2);
+  CHECK_THAT(rep["warnings"].dump(), Catch::Contains("2 glTF validation errors"));
+  CHECK(read_json(out / "asset0.report.json")["input_validation"]["errors"] == 0);
+  CHECK_FALSE(read_json(out / "asset0.report.json")["options"].contains("strict"));
+
+  // --strict is part of the options (both are redone), and the bad asset fails, named.
+  r = run_uvpress(cmd + " --strict");
+  CHECK(r.exit_code == 1);
+  CHECK_THAT(r.out, Catch::Contains("1 ok, 0 skipped, 1 failed"));
+  rep = read_json(out / "bounds.report.json");
+  CHECK(rep["status"] == "failed");
+  CHECK_THAT(rep["error"].get<std::string>(), Catch::Contains("bounds.glb") && Catch::Contains("refused (--strict)"));
+  CHECK(read_json(out / "asset0.report.json")["options"]["strict"] == true);
+}
