@@ -121,24 +121,25 @@ std::vector<float> bake_tile(const TileMap& m, const float* reference, uint32_t*
   const float mean = float(ref_sum) / (kFixedPoint * count);
   const float mu = kSmoothness * count / float(std::max(seen_count, 1u));
   // A = K / Q + mu L (L the 4-neighbour graph Laplacian of the seen texels);
-  // b = R / Q - mean rowsum(K) / Q.
+  // b = R / Q - mean rowsum(K) / Q. A is stored as 9 planes of n (slot s of texel t at
+  // s * n + t), so that the stencil product runs along rows in vector registers.
   std::vector<float> A(size_t(n) * 9), diag(n), r(n), z(n), Ap(n);
   const float inv_q = 1.0f / kFixedPoint;
   for (uint32_t t = 0; t < n; ++t) {
     int32_t rowsum = 0;
     for (uint32_t s = 0; s < 9; ++s) {
       const int32_t k = seen[t] ? K[size_t(t) * 9 + s] : 0;
-      A[size_t(t) * 9 + s] = float(k) * inv_q;
+      A[size_t(s) * n + t] = float(k) * inv_q;
       rowsum += k;
     }
-    if (!seen[t]) A[size_t(t) * 9 + 4] = 1.0f;
+    if (!seen[t]) A[size_t(4) * n + t] = 1.0f;
     const uint32_t ti = t % w, tj = t / w;
     const bool nb[4] = {ti > 0 && seen[t - 1], ti + 1 < w && seen[t + 1], tj > 0 && seen[t - w],
                         tj + 1 < m.height && seen[t + w]};  // left right up down
     const uint32_t nb_slot[4] = {slot(-1, 0), slot(1, 0), slot(0, -1), slot(0, 1)};
     for (int e = 0; e < 4; ++e)
-      if (seen[t] && nb[e]) A[size_t(t) * 9 + 4] += mu, A[size_t(t) * 9 + nb_slot[e]] -= mu;
-    diag[t] = A[size_t(t) * 9 + 4];
+      if (seen[t] && nb[e]) A[size_t(4) * n + t] += mu, A[size_t(nb_slot[e]) * n + t] -= mu;
+    diag[t] = A[size_t(4) * n + t];
     float bt = seen[t] ? float(R[t]) * inv_q : 0.0f;
     bt -= mean * (float(rowsum) * inv_q);
     r[t] = bt;
@@ -150,22 +151,34 @@ std::vector<float> bake_tile(const TileMap& m, const float* reference, uint32_t*
   std::vector<float> pp(size_t(W2) * (h + 2), 0.0f);
   const int32_t offset[9] = {-int32_t(W2) - 1, -int32_t(W2), -int32_t(W2) + 1, -1, 0, 1,
                              int32_t(W2) - 1, int32_t(W2), int32_t(W2) + 1};
-  // f(t, c) for every texel t in order, c its index in the padded tile.
-  auto each = [&](auto&& f) {
-    for (uint32_t jj = 0, t = 0; jj < h; ++jj) {
-      size_t c = size_t(jj + 1) * W2 + 1;
-      for (uint32_t ii = 0; ii < w; ++ii, ++t, ++c) f(t, c);
-    }
-  };
+  // out = A p, row by row: per texel the 9 products summed in slot order (the GLSL twin's
+  // order), texels independent, so the compiler runs a row in vector lanes.
+  const float* const plane[9] = {&A[0],     &A[size_t(n)], &A[2 * size_t(n)], &A[3 * size_t(n)], &A[4 * size_t(n)],
+                                 &A[5 * size_t(n)], &A[6 * size_t(n)], &A[7 * size_t(n)], &A[8 * size_t(n)]};
   auto apply = [&](std::vector<float>& out) {
-    for (uint32_t jj = 0, t = 0; jj < h; ++jj)
-      for (uint32_t ii = 0; ii < w; ++ii, ++t) {
-        const float* a = &A[size_t(t) * 9];
-        const float* c = &pp[size_t(jj + 1) * W2 + ii + 1];
+    for (uint32_t jj = 0; jj < h; ++jj) {
+      const size_t row = size_t(jj) * w;
+      const float* c = &pp[size_t(jj + 1) * W2 + 1];
+      const float *c0 = c + offset[0], *c1 = c + offset[1], *c2 = c + offset[2], *c3 = c + offset[3], *c4 = c + offset[4],
+                  *c5 = c + offset[5], *c6 = c + offset[6], *c7 = c + offset[7], *c8 = c + offset[8];
+      const float *a0 = plane[0] + row, *a1 = plane[1] + row, *a2 = plane[2] + row, *a3 = plane[3] + row,
+                  *a4 = plane[4] + row, *a5 = plane[5] + row, *a6 = plane[6] + row, *a7 = plane[7] + row,
+                  *a8 = plane[8] + row;
+      float* o = &out[row];
+      for (uint32_t ii = 0; ii < w; ++ii) {
         float acc = 0.0f;
-        for (int s = 0; s < 9; ++s) acc += a[s] * c[offset[s]];
-        out[t] = acc;
+        acc += a0[ii] * c0[ii];
+        acc += a1[ii] * c1[ii];
+        acc += a2[ii] * c2[ii];
+        acc += a3[ii] * c3[ii];
+        acc += a4[ii] * c4[ii];
+        acc += a5[ii] * c5[ii];
+        acc += a6[ii] * c6[ii];
+        acc += a7[ii] * c7[ii];
+        acc += a8[ii] * c8[ii];
+        o[ii] = acc;
       }
+    }
   };
   // Dot products in 8 interleaved partial sums added in a fixed order: deterministic, and
   // not bound by the latency of one long chain of additions.
@@ -181,14 +194,16 @@ std::vector<float> bake_tile(const TileMap& m, const float* reference, uint32_t*
   const float bb = dot(r.data(), r.data(), n);
   uint32_t it = 0;
   if (bb > 0.0f) {
-    each([&](uint32_t t, size_t c) { z[t] = r[t] / diag[t], pp[c] = z[t]; });
+    for (uint32_t t = 0; t < n; ++t) z[t] = r[t] / diag[t];
+    for (uint32_t jj = 0; jj < h; ++jj) std::copy_n(&z[size_t(jj) * w], w, &pp[size_t(jj + 1) * W2 + 1]);
     float rz = dot(r.data(), z.data(), n);
     const float stop = kBakeTolerance * kBakeTolerance * bb;
     while (it < kBakeMaxIterations) {
       ++it;
       apply(Ap);
       // p's interior, unpadded, for the dot product and the update of x.
-      each([&](uint32_t t, size_t c) { z[t] = pp[c]; });
+      for (uint32_t jj = 0; jj < h; ++jj)
+        std::copy_n(&pp[size_t(jj + 1) * W2 + 1], w, &z[size_t(jj) * w]);
       float alpha = rz / dot(z.data(), Ap.data(), n);
       for (uint32_t t = 0; t < n; ++t) x[t] += alpha * z[t], r[t] -= alpha * Ap[t];
       if (dot(r.data(), r.data(), n) <= stop) break;
@@ -196,7 +211,11 @@ std::vector<float> bake_tile(const TileMap& m, const float* reference, uint32_t*
       float rz_next = dot(r.data(), z.data(), n);
       float beta = rz_next / rz;
       rz = rz_next;
-      each([&](uint32_t t, size_t c) { pp[c] = z[t] + beta * pp[c]; });
+      for (uint32_t jj = 0; jj < h; ++jj) {
+        float* p = &pp[size_t(jj + 1) * W2 + 1];
+        const float* zr = &z[size_t(jj) * w];
+        for (uint32_t ii = 0; ii < w; ++ii) p[ii] = zr[ii] + beta * p[ii];
+      }
     }
   }
   if (iterations) *iterations = it;
