@@ -391,4 +391,10 @@ TEST_CASE("flatten --assign refuses what it cannot do, before any work", "[flatt
   io::save_gltf(pipeline::make_demo_asset({4, 32}), (dir / "demo.glb").string());
   test::check_input_error(out, "flatten " + quoted(dir / "demo.glb") + " -o " + quoted(out / "x.glb") + " --assign --log " + quoted(out / "l.csv"),
                           out / "l.csv", "--log is not written with --assign");
+  // Nothing textured: nothing to assign the UVs to.
+  io::GltfFile plain = pipeline::make_demo_asset({4, 32});
+  plain.model.materials[0].pbrMetallicRoughness.baseColorTexture = tinygltf::TextureInfo();
+  io::save_gltf(plain, (dir / "untextured.glb").string());
+  test::check_input_error(out, "flatten " + quoted(dir / "untextured.glb") + " -o " + quoted(out / "x.glb") + " --assign --device cpu",
+                          dir / "untextured.glb", "--assign: no textured layout to flatten");
 }

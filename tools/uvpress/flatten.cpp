@@ -37,6 +37,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <numeric>
+#include <set>
 
 namespace uvpress::cli {
 
@@ -313,21 +314,26 @@ nlohmann::ordered_json assign_gltf(const Globals& g, const std::string& input, c
   ProgressDisplay progress(g.verbose);
   nlohmann::ordered_json r = pipeline::reparam(file, *engine, options, std::ref(progress));
   progress.finish();
-  io::save_gltf(file, output, {/*keep_image_names=*/true}, writer);
-  const io::AssetBytes out_files = io::staged_asset_bytes(writer, output);
-  for (const auto& w : r["warnings"]) std::fprintf(stderr, "uvpress: %s: warning: %s\n", input.c_str(), w.get<std::string>().c_str());
   size_t flattened = 0, kept = 0, holes = 0, layouts = 0;
-  std::string sets;
+  std::set<int> tex_coords;  // the UV sets replaced
   for (const auto& l : r["layouts"]) {
     if (!l.contains("isometric")) continue;
     ++layouts;
     flattened += l["isometric"]["charts_flattened"].get<size_t>(), kept += l["isometric"]["charts_kept"].get<size_t>();
     holes += l["isometric"]["holes_filled"].get<size_t>();
-    for (const auto& s : l["uv_sets"]) {
-      const std::string name = "TEXCOORD_" + std::to_string(s["tex_coord"].get<int>());
-      if (sets.find(name) == std::string::npos) sets += (sets.empty() ? "" : ", ") + name;
-    }
+    for (const auto& s : l["uv_sets"]) tex_coords.insert(s["tex_coord"].get<int>());
   }
+  if (layouts == 0) {  // before any warning: one error line
+    std::string why;
+    for (const auto& l : r["layouts"])
+      if (l.contains("untouched")) why += (why.empty() ? "" : "; ") + l["untouched"].get<std::string>();
+    throw InputError(input, "--assign: no textured layout to flatten" + (why.empty() ? std::string() : ": " + why));
+  }
+  std::string sets;
+  for (int t : tex_coords) sets += (sets.empty() ? "TEXCOORD_" : ", TEXCOORD_") + std::to_string(t);
+  io::save_gltf(file, output, {/*keep_image_names=*/true}, writer);
+  const io::AssetBytes out_files = io::staged_asset_bytes(writer, output);
+  for (const auto& w : r["warnings"]) std::fprintf(stderr, "uvpress: %s: warning: %s\n", input.c_str(), w.get<std::string>().c_str());
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   nlohmann::ordered_json report = {{"input", input}, {"output", output}, {"assign", true}, {"seconds", seconds},
                                    {"input_bytes", in_files.total()}, {"output_bytes", out_files.total()},
@@ -335,12 +341,6 @@ nlohmann::ordered_json assign_gltf(const Globals& g, const std::string& input, c
   for (auto& [key, value] : r.items())
     if (!report.contains(key)) report[key] = value;
   report["seconds"] = seconds;
-  if (layouts == 0) {
-    std::string why;
-    for (const auto& l : r["layouts"])
-      if (l.contains("untouched")) why += (why.empty() ? "" : "; ") + l["untouched"].get<std::string>();
-    throw InputError(input, "--assign: no textured layout to flatten" + (why.empty() ? std::string() : ": " + why));
-  }
   const nlohmann::ordered_json new_costs = pipeline::image_costs(file)["totals"];
   // Packed no denser than the source where the input was densest: the ratio comes out below --cost.
   bool at_density = false;
@@ -420,7 +420,7 @@ void add_flatten(CLI::App& app, Globals& g) {
                 "density, packed and its textures re-baked into them (replacing the UV set they sample)");
   cmd->add_option("--cost", a->cost, "With --assign: texels of the re-baked textures relative to the input's")
       ->capture_default_str()
-      ->check(CLI::Range(0.001, 4.0));
+      ->check(CLI::Range(0.001, 1.0));
   // Test hook, not in --help: the N-th numeric factorization fails (not positive definite).
   cmd->add_option("--test-break-factorization", a->break_factorization)->group("");
   cmd->callback([&g, a] {
