@@ -2,7 +2,9 @@
 
 #include "core/disjoint_sets.h"
 
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstring>
 #include <numeric>
 #include <unordered_map>
@@ -57,6 +59,23 @@ Mesh weld_uv_mesh(const float* positions, const float* uvs, size_t vertex_count,
   m.triangles.resize(n), m.uv_triangles.resize(n);
   for (size_t i = 0; i < n; ++i) m.triangles[i] = to_position[indices[i]], m.uv_triangles[i] = to_uv[indices[i]];
   return m;
+}
+
+std::array<double, 2> shelf_layout(std::vector<ShelfBox>& boxes, double gap) {
+  double total = 0, widest = 0;
+  for (const auto& b : boxes) total += b.w * b.h, widest = std::max(widest, b.w);
+  std::vector<size_t> order(boxes.size());
+  std::iota(order.begin(), order.end(), size_t(0));
+  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return boxes[a].h > boxes[b].h; });
+  const double width = std::max(widest, std::sqrt(total) * 1.1);
+  double x = gap, y = gap, row = 0, used_w = 0;
+  for (size_t i : order) {
+    ShelfBox& b = boxes[i];
+    if (x > gap && x + b.w > width) x = gap, y += row + gap, row = 0;
+    b.x = x, b.y = y;
+    x += b.w + gap, row = std::max(row, b.h), used_w = std::max(used_w, x);
+  }
+  return {used_w, y + row + gap};
 }
 
 }  // namespace uvpress::atlas

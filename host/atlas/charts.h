@@ -4,6 +4,7 @@
 
 #include "core/mesh.h"
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <vector>
@@ -23,5 +24,17 @@ Charts find_charts(const Mesh& mesh);
 // position and UV are welded first: only real UV seams separate charts.
 Mesh weld_uv_mesh(const float* positions, const float* uvs, size_t vertex_count, const uint32_t* indices,
                   size_t index_count);
+
+// Boxes (charts' bounding boxes, any units) laid out on shelves at one scale: tallest first
+// (ties in input order), left to right, a new shelf when the next box would pass the width
+// max(widest box, 1.1 sqrt(sum of box areas)); `gap` around and between boxes. Sets each
+// box's lower corner (x, y) and returns the extent (width, height), outer gaps included.
+// The quick layout of flattened charts (flatten's new UV set, eval's isometric baseline);
+// reparam packs the charts' footprints instead (atlas/pack.h).
+struct ShelfBox {
+  double w = 0, h = 0;  // size
+  double x = 0, y = 0;  // placed lower corner
+};
+std::array<double, 2> shelf_layout(std::vector<ShelfBox>& boxes, double gap);
 
 }  // namespace uvpress::atlas

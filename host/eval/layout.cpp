@@ -307,23 +307,13 @@ std::vector<float> isometric_uvs(const LayoutMesh& ref, double* aspect, nlohmann
     }
     members[c] = std::move(back);
   }
-  // Shelves, tallest charts first, at one scale; a gutter of 1% of sqrt(area).
-  double total = 0, widest = 0;
-  for (const auto& b : boxes) total += (b.hi[0] - b.lo[0]) * (b.hi[1] - b.lo[1]), widest = std::max(widest, b.hi[0] - b.lo[0]);
-  std::vector<uint32_t> order(charts.count);
-  std::iota(order.begin(), order.end(), 0u);
-  std::stable_sort(order.begin(), order.end(),
-                   [&](uint32_t a, uint32_t b) { return boxes[a].hi[1] - boxes[a].lo[1] > boxes[b].hi[1] - boxes[b].lo[1]; });
-  const double width = std::max(widest, std::sqrt(total) * 1.1), gutter = 0.01 * std::sqrt(total);
-  double x = gutter, y = gutter, row = 0, used_w = 0;
-  for (uint32_t c : order) {
-    Box& b = boxes[c];
-    const double w = b.hi[0] - b.lo[0], h = b.hi[1] - b.lo[1];
-    if (x > gutter && x + w > width) x = gutter, y += row + gutter, row = 0;
-    b.x = x, b.y = y;
-    x += w + gutter, row = std::max(row, h), used_w = std::max(used_w, x);
-  }
-  const double used_h = y + row + gutter;
+  // Shelves at one scale; a gutter of 1% of sqrt(area).
+  std::vector<atlas::ShelfBox> shelf(charts.count);
+  double total = 0;
+  for (uint32_t c = 0; c < charts.count; ++c)
+    shelf[c].w = boxes[c].hi[0] - boxes[c].lo[0], shelf[c].h = boxes[c].hi[1] - boxes[c].lo[1], total += shelf[c].w * shelf[c].h;
+  const auto [used_w, used_h] = atlas::shelf_layout(shelf, 0.01 * std::sqrt(total));
+  for (uint32_t c = 0; c < charts.count; ++c) boxes[c].x = shelf[c].x, boxes[c].y = shelf[c].y;
   for (uint32_t c = 0; c < charts.count; ++c)
     for (uint32_t u : members[c]) {
       uv[2 * size_t(u)] = (uv[2 * size_t(u)] - boxes[c].lo[0] + boxes[c].x) / used_w;

@@ -36,7 +36,6 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <numeric>
 #include <set>
 
 namespace uvpress::cli {
@@ -189,36 +188,23 @@ void flatten_gltf(const Globals& g, const std::string& input, const std::string&
   }
   g.stage("flatten", t0);
 
-  // Shelf layout at one common scale (UV area = 3-D area), tallest charts first.
+  // Shelf layout at one common scale (UV area = 3-D area; atlas::shelf_layout).
   struct Box {
     double lo[2], hi[2], x = 0, y = 0;
   };
   std::vector<Box> box(charts.size());
+  std::vector<atlas::ShelfBox> shelf(charts.size());
   double total_area = 0;
   for (size_t c = 0; c < charts.size(); ++c) {
     Box& b = box[c];
     b.lo[0] = b.lo[1] = 1e300, b.hi[0] = b.hi[1] = -1e300;
     const auto& uv = charts[c].result.uv;
     for (size_t i = 0; i < uv.size(); ++i) b.lo[i % 2] = std::min(b.lo[i % 2], uv[i]), b.hi[i % 2] = std::max(b.hi[i % 2], uv[i]);
-    total_area += (b.hi[0] - b.lo[0]) * (b.hi[1] - b.lo[1]);
+    shelf[c].w = b.hi[0] - b.lo[0], shelf[c].h = b.hi[1] - b.lo[1];
+    total_area += shelf[c].w * shelf[c].h;
   }
-  std::vector<size_t> order(charts.size());
-  std::iota(order.begin(), order.end(), 0);
-  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) {
-    return box[a].hi[1] - box[a].lo[1] > box[b].hi[1] - box[b].lo[1];
-  });
-  double width = 0;
-  for (const auto& b : box) width = std::max(width, b.hi[0] - b.lo[0]);
-  width = std::max(width, std::sqrt(total_area) * 1.2);
-  const double gutter = 0.01 * std::sqrt(total_area);
-  double x = 0, y = 0, row = 0;
-  for (size_t c : order) {
-    Box& b = box[c];
-    const double w = b.hi[0] - b.lo[0], h = b.hi[1] - b.lo[1];
-    if (x > 0 && x + w > width) x = 0, y += row + gutter, row = 0;
-    b.x = x, b.y = y;
-    x += w + gutter, row = std::max(row, h);
-  }
+  atlas::shelf_layout(shelf, 0.01 * std::sqrt(total_area));
+  for (size_t c = 0; c < charts.size(); ++c) box[c].x = shelf[c].x, box[c].y = shelf[c].y;
   // Per primitive: the new UV of every glTF vertex.
   std::vector<std::vector<double>> prim_uv(asset.primitives.size());
   for (size_t p = 0; p < asset.primitives.size(); ++p) prim_uv[p].assign(2 * asset.primitives[p].vertex_count(), 0.0);
