@@ -112,7 +112,9 @@ TEST_CASE("batch: reports, summary, one failure never stops the others, resume",
   CHECK(r.exit_code == 1);
   CHECK_THAT(r.out, Catch::Contains("asset0") && Catch::Contains("broken") && Catch::Contains("FAILED"));
   CHECK_THAT(r.out, Catch::Contains("4 assets: 3 ok, 0 skipped, 1 failed"));
-  CHECK_THAT(r.out, Catch::Contains("written") && Catch::Contains("q / q resize"));
+  CHECK_THAT(r.out, Catch::Contains("written") && Catch::Contains("q / q resize") && Catch::Contains("size in -> out"));
+  // Each ok row shows the whole asset's bytes before and after.
+  CHECK_THAT(r.out, Catch::Matches("(.|\n)*asset0 +ok .* [0-9.]+ K?B -> [0-9.]+ K?B (.|\n)*"));
   CHECK_THAT(r.err, Catch::Contains("batch [4/4]"));
   auto summary = read_json(out / "summary.json");
   CHECK(summary == read_json(dir / "run.json"));

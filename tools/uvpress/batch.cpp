@@ -40,16 +40,18 @@ std::string cell(const nlohmann::ordered_json& row, const char* key, const char*
 void print_table(const nlohmann::ordered_json& summary) {
   size_t w = 5;
   for (const auto& a : summary["assets"]) w = std::max(w, a["name"].get<std::string>().size());
-  std::printf("%-*s  %-8s  %-9s  %8s  %10s  %19s  %10s  %s\n", int(w), "asset", "status", "written", "seconds", "cost ratio",
-              "q / q resize", "size out", "output / error");
+  std::printf("%-*s  %-8s  %-9s  %8s  %10s  %19s  %21s  %s\n", int(w), "asset", "status", "written", "seconds", "cost ratio",
+              "q / q resize", "size in -> out", "output / error");
   for (const auto& a : summary["assets"]) {
     std::string status = a["status"].get<std::string>();
-    std::string size = a.contains("output_bytes") ? human_bytes(a["output_bytes"].get<uint64_t>()) : "-";
+    // The whole asset (JSON, buffers, images) before and after.
+    std::string size = (a.contains("input_bytes") ? human_bytes(a["input_bytes"].get<uint64_t>()) : std::string("-")) + " -> " +
+                       (a.contains("output_bytes") ? human_bytes(a["output_bytes"].get<uint64_t>()) : std::string("-"));
     std::string last = status == "ok" || status == "skipped" ? a.value("output", "") : a.value("error", "");
     // "untouched": ok, but nothing was re-parameterized (the report's warnings say why).
     const std::string written = a.value("written", "-");
     const std::string q = a.contains("q") ? cell(a, "q", "%.3g") + " / " + cell(a, "q_resize", "%.3g") : "-";
-    std::printf("%-*s  %-8s  %-9s  %8s  %10s  %19s  %10s  %s\n", int(w), a["name"].get<std::string>().c_str(),
+    std::printf("%-*s  %-8s  %-9s  %8s  %10s  %19s  %21s  %s\n", int(w), a["name"].get<std::string>().c_str(),
                 status == "failed" ? "FAILED" : status.c_str(), written.c_str(), cell(a, "seconds", "%.1f").c_str(),
                 cell(a, "cost_ratio", "%.3f").c_str(), q.c_str(), size.c_str(), last.c_str());
   }
