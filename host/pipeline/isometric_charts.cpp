@@ -57,10 +57,6 @@ IsometricCharts isometric_charts(const std::vector<ChartGeometry>& charts, const
   double texels = 0, area = 0;
   for (size_t c = 0; c < charts.size(); ++c) {
     const ChartGeometry& g = charts[c];
-    if (!g.keep.empty()) {
-      keep(c, g.keep);
-      continue;
-    }
     Mesh mesh;
     mesh.positions = g.positions;
     mesh.triangles = *g.triangles;

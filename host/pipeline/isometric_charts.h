@@ -8,10 +8,9 @@
 // Each flattened chart is turned to match its input UVs (orthogonal Procrustes): the
 // solver's frame is arbitrary, and the author's orientation packs well (the demo's square
 // sheet: 93 % of its box under the chart, 51 % as the solver left it). A chart keeps its
-// input shape, with a reason, when the caller says so (`keep`), when it is no disk even
-// with its holes filled, when the solve fails, or when its flattened boundary runs over
-// itself (new overlapping triangle pairs): a layout is never written with UVs that
-// overlap where the input's did not. A chart folded in the input is flattened like any
+// input shape, with a reason, when it is no disk even with its holes filled, when the
+// solve fails, or when its flattened boundary runs over itself (new overlapping triangle
+// pairs): a layout is never written with UVs that overlap where the input's did not. A chart folded in the input is flattened like any
 // other: the solve does not start from its UVs, and unfolds it.
 #pragma once
 
@@ -30,7 +29,6 @@ struct ChartGeometry {
   std::vector<double> positions;
   const std::vector<uint32_t>* triangles = nullptr;
   const std::vector<double>* uv = nullptr;
-  std::string keep;  // non-empty: keep the input shape for this reason (not flattened)
 };
 
 struct IsometricCharts {

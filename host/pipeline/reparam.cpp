@@ -172,6 +172,11 @@ struct Prepared {
   std::vector<std::vector<uint32_t>> units;  // chart indices per unit
   std::vector<uint32_t> unit_of_chart;
   size_t shared_charts = 0;
+  // ReparamOptions::isometric: the charts flattened once (pipeline/isometric_charts.h), and
+  // the packing units with each flattened chart on its own (the others keep their grouping).
+  IsometricCharts isometric;
+  std::vector<std::vector<uint32_t>> isometric_units;
+  std::vector<uint32_t> isometric_unit_of_chart;
 };
 
 // Groups the charts of `P` that cover a common source texel centre into packing units and
@@ -217,6 +222,44 @@ void find_shared_texels(Prepared& P) {
   for (const auto& unit : P.units)
     if (unit.size() > 1)
       for (uint32_t c : unit) P.charts[c].shared = true, ++P.shared_charts;
+}
+
+// Flattens every chart of `P` for the isometric layout (a folded chart too: the solve does
+// not start from its UVs, and unfolds it) and groups the packing units, once per layout:
+// every candidate built from it (the least-squares variants) reuses the charts.
+void prepare_isometric(const io::Asset& asset, const Layout& L, Prepared& P, const flatten::Options& options) {
+  std::vector<ChartGeometry> geometry(P.charts.size());
+  for (size_t c = 0; c < P.charts.size(); ++c) {
+    const Chart& ch = P.charts[c];
+    const io::Primitive& prim = asset.primitives[size_t(L.uv_sets[ch.uv_set].primitive)];
+    ChartGeometry& g = geometry[c];
+    g.triangles = &ch.local, g.uv = &ch.uv;
+    // Positions per local vertex (the welded UV vertex's position, any of its corners).
+    g.positions.assign(3 * ch.vertices.size(), 0.0);
+    std::map<uint32_t, uint32_t> local_of;
+    for (uint32_t v = 0; v < ch.vertices.size(); ++v) local_of[ch.vertices[v]] = v;
+    for (uint32_t t : ch.triangles)
+      for (int k = 0; k < 3; ++k) {
+        const uint32_t pv = prim.indices[3 * size_t(t) + size_t(k)];
+        const uint32_t l = local_of.at(P.welded_of_vertex[ch.uv_set][pv]);
+        for (int d = 0; d < 3; ++d) g.positions[3 * size_t(l) + size_t(d)] = prim.positions[3 * size_t(pv) + size_t(d)];
+      }
+  }
+  P.isometric = isometric_charts(geometry, options);
+  P.isometric_units.clear();
+  P.isometric_unit_of_chart.assign(P.charts.size(), 0);
+  std::map<uint32_t, uint32_t> unit_of_group;
+  for (uint32_t c = 0; c < P.charts.size(); ++c) {
+    uint32_t u;
+    if (P.isometric.flattened[c]) {
+      u = uint32_t(P.isometric_units.size()), P.isometric_units.emplace_back();
+    } else {
+      auto [it, fresh] = unit_of_group.emplace(P.unit_of_chart[c], uint32_t(P.isometric_units.size()));
+      if (fresh) P.isometric_units.emplace_back();
+      u = it->second;
+    }
+    P.isometric_units[u].push_back(c), P.isometric_unit_of_chart[c] = u;
+  }
 }
 
 // A candidate layout: the triangle stage's targets with every stretch factor floored at
@@ -327,60 +370,20 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
     std::vector<std::string> overlapped;  // charts fallen back to their input shape, with their new pairs
     // Packing units: charts that share source texels move together, in their input
     // arrangement, unless the isometric layout gives each of them texels of its own.
-    std::vector<std::vector<uint32_t>> units = P.units;
-    std::vector<uint32_t> unit_of_chart = P.unit_of_chart;
-    std::vector<char> flattened(charts.size(), 0);  // isometric: charts that took their flattened shape
-    if (cand.isometric) {
-      std::vector<ChartGeometry> geometry(charts.size());
-      for (size_t c = 0; c < charts.size(); ++c) {
-        const Chart& ch = charts[c];
-        const io::Primitive& prim = asset.primitives[size_t(L.uv_sets[ch.uv_set].primitive)];
-        ChartGeometry& g = geometry[c];
-        // A folded chart (rigid) is flattened too: the solve does not start from its UVs, and
-        // unfolds it.
-        g.triangles = &ch.local, g.uv = &ch.uv;
-        // Positions per local vertex (the welded UV vertex's position, any of its corners).
-        g.positions.assign(3 * ch.vertices.size(), 0.0);
-        std::map<uint32_t, uint32_t> local_of;
-        for (uint32_t v = 0; v < ch.vertices.size(); ++v) local_of[ch.vertices[v]] = v;
-        for (uint32_t t : ch.triangles)
-          for (int k = 0; k < 3; ++k) {
-            const uint32_t pv = prim.indices[3 * size_t(t) + size_t(k)];
-            const uint32_t l = local_of.at(P.welded_of_vertex[ch.uv_set][pv]);
-            for (int d = 0; d < 3; ++d) g.positions[3 * size_t(l) + size_t(d)] = prim.positions[3 * size_t(pv) + size_t(d)];
-          }
-      }
-      const std::string stage = "flatten (layout " + std::to_string(li) + ")";
-      if (progress) progress(stage, 0, 1);
-      IsometricCharts iso = isometric_charts(geometry, o.flatten);
-      if (progress) progress(stage, 1, 1);
-      new_uv_of = std::move(iso.uv);
-      flattened = iso.flattened;
-      for (const std::string& k : iso.kept)
-        warnings.push_back("layout " + std::to_string(li) + " " + k + " (input shape kept)");
-      // A flattened chart is a unit of its own; the others keep their grouping.
-      units.clear();
-      std::map<uint32_t, uint32_t> unit_of_group;
-      for (uint32_t c = 0; c < charts.size(); ++c) {
-        uint32_t u;
-        if (iso.flattened[c]) {
-          u = uint32_t(units.size()), units.emplace_back();
-        } else {
-          auto [it, fresh] = unit_of_group.emplace(P.unit_of_chart[c], uint32_t(units.size()));
-          if (fresh) units.emplace_back();
-          u = it->second;
-        }
-        units[u].push_back(c), unit_of_chart[c] = u;
-      }
-      const size_t flat = size_t(std::count(iso.flattened.begin(), iso.flattened.end(), 1));
+    const bool isometric = cand.isometric && !P.isometric.uv.empty();
+    const auto& units = isometric ? P.isometric_units : P.units;
+    const auto& unit_of_chart = isometric ? P.isometric_unit_of_chart : P.unit_of_chart;
+    if (isometric) {
+      new_uv_of = P.isometric.uv;
+      const size_t flat = size_t(std::count(P.isometric.flattened.begin(), P.isometric.flattened.end(), 1));
       jl["isometric"] = {{"charts_flattened", flat},
                          {"charts_kept", charts.size() - flat},
-                         {"holes_filled", iso.filled_holes},
-                         {"texels_per_area", iso.texels_per_area}};
+                         {"holes_filled", P.isometric.filled_holes},
+                         {"texels_per_area", P.isometric.texels_per_area}};
     }
     const std::string mesh_stage = "mesh stage (" + cand.name + ", layout " + std::to_string(li) + ")";
-    if (progress && cand.reshape && !cand.isometric) progress(mesh_stage, 0, charts.size());
-    for (size_t c = 0; c < charts.size() && !cand.isometric; ++c) {
+    if (progress && cand.reshape && !isometric) progress(mesh_stage, 0, charts.size());
+    for (size_t c = 0; c < charts.size() && !isometric; ++c) {
       const Chart& ch = charts[c];
       if (!cand.reshape || P.results[ch.uv_set].empty() || ch.rigid || ch.shared) {
         new_uv_of[c] = ch.uv;
@@ -447,7 +450,7 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
       const Chart& ch = charts[c];
       for (size_t t = 0; t < ch.triangles.size(); ++t) {
         const uint32_t* l = &ch.local[3 * t];
-        double before = flattened[c] ? 1.0 : signed_area(&ch.uv[2 * l[0]], &ch.uv[2 * l[1]], &ch.uv[2 * l[2]]);
+        double before = isometric && P.isometric.flattened[c] ? 1.0 : signed_area(&ch.uv[2 * l[0]], &ch.uv[2 * l[1]], &ch.uv[2 * l[2]]);
         double after = signed_area(&new_uv_of[c][2 * l[0]], &new_uv_of[c][2 * l[1]], &new_uv_of[c][2 * l[2]]);
         if ((before > 0 && after <= 0) || (before < 0 && after >= 0)) ++layout_flips;
       }
@@ -856,6 +859,13 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
       }
     }
     find_shared_texels(P);
+    if (o.isometric) {
+      const std::string stage = "flatten (layout " + std::to_string(li) + ")";
+      if (progress) progress(stage, 0, 1);
+      prepare_isometric(asset, L, P, o.flatten);
+      if (progress) progress(stage, 1, 1);
+      for (const std::string& k : P.isometric.kept) warnings.push_back("layout " + std::to_string(li) + " " + k + " (input shape kept)");
+    }
 
     // Triangle stage, for the triangles of charts that may be reshaped (rigid charts and
     // charts sharing texels keep their shape: optimizing them would be wasted work).
@@ -1240,12 +1250,7 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
   report["triangles_optimized"] = optimized;
   report["triangles_infeasible"] = infeasible;
   report["stages"] = stages;
-  // Each warning once (a layout built again for the least-squares or wide-gutter variant
-  // repeats its own), in the order first given.
-  json unique = json::array();
-  for (const auto& w : warnings)
-    if (std::find(unique.begin(), unique.end(), w) == unique.end()) unique.push_back(w);
-  report["warnings"] = unique;
+  report["warnings"] = warnings;
   report["seconds"] = t_start.seconds();
   return report;
 }
