@@ -292,6 +292,12 @@ std::map<std::string, size_t> count_by_code(const std::vector<RuleIssue>& issues
   return out;
 }
 
+nlohmann::ordered_json validation_json(const std::vector<RuleIssue>& issues) {
+  nlohmann::ordered_json j = {{"errors", issues.size()}, {"codes", nlohmann::ordered_json::object()}};
+  for (const auto& [code, n] : count_by_code(issues)) j["codes"][code] = n;
+  return j;
+}
+
 std::string describe_issues(const std::vector<RuleIssue>& issues, size_t codes) {
   const auto by_code = count_by_code(issues);
   std::vector<std::pair<std::string, size_t>> sorted(by_code.begin(), by_code.end());

@@ -35,6 +35,8 @@
 
 #include "io/gltf_io.h"
 
+#include <nlohmann/json.hpp>
+
 #include <cstddef>
 #include <map>
 #include <string>
@@ -56,6 +58,9 @@ const std::vector<std::string>& rule_codes();
 
 // Issues per code, in code order.
 std::map<std::string, size_t> count_by_code(const std::vector<RuleIssue>& issues);
+
+// What reports carry as `input_validation`: {"errors": n, "codes": {code: n}}.
+nlohmann::ordered_json validation_json(const std::vector<RuleIssue>& issues);
 
 // "127 glTF validation errors (126 ANIMATION_SAMPLER_ACCESSOR_WITH_BYTESTRIDE, 1 ...)":
 // the count, then the codes by count (most first), at most `codes` of them.

@@ -279,7 +279,7 @@ json process_asset(const BatchItem& item, const BatchOptions& o, engine::Engine*
     // The input's own glTF errors: refused under --strict, else a warning (the output keeps
     // what reparam does not rewrite).
     const std::vector<io::RuleIssue> issues = io::check_rules(file);
-    report["input_validation"] = {{"errors", issues.size()}, {"codes", io::count_by_code(issues)}};
+    report["input_validation"] = io::validation_json(issues);
     if (!issues.empty() && o.strict) throw InputError(item.input, io::describe_issues(issues) + ": refused (--strict)");
     report["input_bytes"] = io::asset_bytes(item.input, o.refs).total();  // JSON, buffers and images
     auto r = reparam(file, *engine, o.reparam);

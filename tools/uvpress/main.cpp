@@ -31,10 +31,7 @@ std::unique_ptr<engine::Engine> Globals::make_engine() const {
 io::GltfFile Globals::load_input(const std::string& path, nlohmann::ordered_json* checked) const {
   io::GltfFile file = io::load_gltf(path, refs());
   const std::vector<io::RuleIssue> issues = io::check_rules(file);
-  if (checked) {
-    *checked = {{"errors", issues.size()}, {"codes", nlohmann::ordered_json::object()}};
-    for (const auto& [code, n] : io::count_by_code(issues)) (*checked)["codes"][code] = n;
-  }
+  if (checked) *checked = io::validation_json(issues);
   if (issues.empty()) return file;
   // An input the later stages cannot read fails with that reason alone (one error line).
   io::build_asset(file);
