@@ -229,7 +229,8 @@ class Engine {
   // GMSD steps 1 and 2 (reference/gmsd.md) for every image of the batch.
   virtual LuminanceBatch luminance(const Rgba8Batch& batch) = 0;
 
-  // GMSD (reference/gmsd.md) of every pair; images up to 64 x 64 on Vulkan.
+  // GMSD (reference/gmsd.md) of every pair, images of any size (on Vulkan, those above
+  // 64 x 64 are scored on the host).
   virtual std::vector<float> gmsd(const ImagePairs& pairs) = 0;
 
   // Rasterizes every view (coverage, reference render). Throws EngineError for a view that

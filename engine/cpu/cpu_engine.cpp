@@ -3,6 +3,7 @@
 // path is tested against and the fast path on machines without a GPU.
 #include "engine.h"
 #include "gmsd.h"
+#include "parallel_for.h"
 #include "views.h"
 
 #include <algorithm>
@@ -13,27 +14,6 @@
 
 namespace uvpress::engine {
 namespace {
-
-// Runs fn(i) for i in [0, n) on up to `threads` threads, handing out blocks of 8 from an
-// atomic counter (view costs vary a lot: balancing matters). Results depend only on i,
-// never on which thread ran it, so output is identical for any thread count.
-template <class Fn>
-void parallel_for(uint32_t n, unsigned threads, Fn fn) {
-  unsigned t = std::max(1u, std::min<unsigned>(threads, (n + 7) / 8));
-  if (t == 1) {
-    for (uint32_t i = 0; i < n; ++i) fn(i);
-    return;
-  }
-  std::atomic<uint32_t> next{0};
-  auto work = [&] {
-    for (uint32_t first; (first = next.fetch_add(8)) < n;)
-      for (uint32_t i = first; i < std::min(n, first + 8); ++i) fn(i);
-  };
-  std::vector<std::thread> pool;
-  for (unsigned k = 1; k < t; ++k) pool.emplace_back(work);
-  work();
-  for (auto& th : pool) th.join();
-}
 
 // luminance.comp
 void luminance_image(const uint32_t* rgba, uint32_t w, uint32_t h, float* y) {
@@ -88,11 +68,12 @@ class CpuEngine final : public Engine {
   }
 
   std::vector<float> gmsd(const ImagePairs& p) override {
+    constexpr size_t kSmallImage = 64 * 64;  // a view of the triangle stage
     std::vector<float> out(p.count);
     const size_t n = size_t(p.width) * p.height;
-    parallel_for(p.count, threads_, [&](uint32_t k) {
-      out[k] = cpu::gmsd<float>(p.first + k * n, p.second + k * n, p.width, p.height);
-    });
+    parallel_for(
+        p.count, threads_, [&](uint32_t k) { out[k] = cpu::gmsd<float>(p.first + k * n, p.second + k * n, p.width, p.height); },
+        n > kSmallImage ? 1 : 8);
     return out;
   }
 

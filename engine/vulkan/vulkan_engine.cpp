@@ -11,6 +11,8 @@
 #include "view_score.spv.h"
 #include "render_mesh.spv.h"
 #include "rebake.spv.h"
+#include "cpu/gmsd.h"
+#include "cpu/parallel_for.h"
 #include "mesh_render.h"
 
 #include <algorithm>
@@ -19,6 +21,7 @@
 #include <cstring>
 #include <memory>
 #include <string>
+#include <thread>
 #include <vector>
 
 namespace uvpress::engine {
@@ -340,8 +343,14 @@ class VulkanEngine final : public Engine {
     std::vector<float> out(pairs.count);
     const uint64_t n = uint64_t(pairs.width) * pairs.height;
     if (pairs.count == 0 || n == 0) return out;
-    if (pairs.width > shader::kViewMaxSize || pairs.height > shader::kViewMaxSize)
-      throw EngineError("Vulkan gmsd: images larger than 64 x 64 (use the CPU backend)");
+    if (pairs.width > shader::kViewMaxSize || pairs.height > shader::kViewMaxSize) {
+      // gmsd.comp holds one image per workgroup in shared memory (64 x 64 at most): larger
+      // ones (eval's views) are scored by the CPU reference, one image per thread.
+      parallel_for(pairs.count, std::max(1u, std::thread::hardware_concurrency()), [&](uint32_t k) {
+        out[k] = cpu::gmsd<float>(pairs.first + k * n, pairs.second + k * n, pairs.width, pairs.height);
+      }, 1);
+      return out;
+    }
     const uint64_t per_chunk = std::min<uint64_t>(pairs.count, max_buffer_ / (4 * n));
     vk::Buffer& a = buffer(pair_a_, 4 * n * per_chunk);
     vk::Buffer& b = buffer(pair_b_, 4 * n * per_chunk);

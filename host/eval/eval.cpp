@@ -3,10 +3,8 @@
 
 #include "core/error.h"
 #include "core/stopwatch.h"
-#include "cpu/gmsd.h"
 #include "layout.h"
 #include "lit.h"
-#include "perceptual/triangle_view.h"
 #include "resize.h"
 
 #include <algorithm>
@@ -187,7 +185,7 @@ Texture view_texture(const Image& image, TextureFilter filter, bool rgb = false,
       for (size_t i = 0; i < size_t(level.width) * level.height; ++i)
         for (uint32_t c = 0; c < 3; ++c) t.texels.push_back(level.pixels[i * level.channels + std::min(c, level.channels - 1)]);
     } else {
-      const auto y = perceptual::luminance_plane(level);
+      const auto y = luminance_plane(level);
       t.texels.insert(t.texels.end(), y.begin(), y.end());
     }
   }
@@ -265,14 +263,8 @@ void for_each_view(size_t count, Fn&& fn) {
 void gmsd_views(engine::Engine& engine, const float* ref, const float* img, uint32_t res, size_t count, float* out,
                 Timing& timing) {
   const Stopwatch t0;
-  if (res <= shader::kViewMaxSize) {
-    engine::ImagePairs pairs{res, res, uint32_t(count), ref, img};
-    const auto g = engine.gmsd(pairs);
-    std::copy(g.begin(), g.end(), out);
-  } else {
-    const size_t n = size_t(res) * res;
-    for_each_view(count, [&](size_t v) { out[v] = engine::cpu::gmsd<float>(ref + v * n, img + v * n, res, res); });
-  }
+  const auto g = engine.gmsd(engine::ImagePairs{res, res, uint32_t(count), ref, img});
+  std::copy(g.begin(), g.end(), out);
   timing.gmsd += t0.seconds();
 }
 

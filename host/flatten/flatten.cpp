@@ -17,7 +17,9 @@
 #include "flatten/disk_topology.h"
 #include "flatten/progressive.h"
 #include "flatten/solver.h"
-#include "flatten/symmetric_dirichlet.h"
+#include "core/parallel.h"
+#include "flatten/problem.h"
+#include "solve/triangle_energy.h"
 #include "flatten/tutte.h"
 
 #include <algorithm>
@@ -116,7 +118,7 @@ void analyze(const Problem& p, const std::vector<double>& uv, const std::vector<
   for (long t = 0; t < nt; ++t) {
     double* J = &a.J[4 * size_t(t)];
     jacobian(&p.ideal[4 * size_t(t)], uv.data(), &p.triangles[3 * size_t(t)], J);
-    const double d = distortion(J);
+    const double d = solve::distortion(J);
     a.D[size_t(t)] = d;
     e[size_t(t)] = weights[size_t(t)] * d;
     max_d = std::max(max_d, d);

@@ -1,6 +1,7 @@
 #include "flatten/progressive.h"
 
-#include "flatten/symmetric_dirichlet.h"
+#include "core/mat2.h"
+#include "core/parallel.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,6 +1,6 @@
 #include "flatten/slim.h"
 
-#include "flatten/symmetric_dirichlet.h"
+#include "core/mat2.h"
 
 namespace uvpress::flatten {
 

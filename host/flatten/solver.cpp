@@ -1,9 +1,12 @@
 #include "flatten/solver.h"
 
+#include "core/mat2.h"
+#include "core/parallel.h"
 #include "core/stopwatch.h"
 #include "flatten/composite_majorization.h"
-#include "flatten/line_search.h"
 #include "flatten/slim.h"
+#include "solve/line_search.h"
+#include "solve/triangle_energy.h"
 
 #include <algorithm>
 #include <cmath>
@@ -28,7 +31,7 @@ double Solver::energy(const std::vector<double>& uv, const std::vector<double>& 
   for (long t = 0; t < nt; ++t) {
     double J[4];
     jacobian(&ref[4 * size_t(t)], uv.data(), &p_.triangles[3 * size_t(t)], J);
-    per_triangle_[size_t(t)] = w[size_t(t)] * distortion(J);
+    per_triangle_[size_t(t)] = w[size_t(t)] * solve::distortion(J);
   }
   return fixed_order_sum(size_t(nt), per_triangle_.data());
 }
@@ -42,8 +45,8 @@ void Solver::gradient(const std::vector<double>& uv, const std::vector<double>& 
     double J[4], G[4];
     const double* R = &ref[4 * size_t(t)];
     jacobian(R, uv.data(), &p_.triangles[3 * size_t(t)], J);
-    distortion_gradient(J, G);
-    triangle_gradient(R, G, w[size_t(t)], &grad6_[6 * size_t(t)]);
+    solve::distortion_gradient(J, G);
+    solve::triangle_gradient(R, G, w[size_t(t)], &grad6_[6 * size_t(t)]);
   }
   system_.gather_gradient(grad6_, grad);
 }
@@ -62,9 +65,9 @@ StepStats Solver::step(std::vector<double>& uv, const std::vector<double>& ref, 
     double J[4], G[4];
     const double* R = &ref[4 * size_t(t)];
     jacobian(R, uv.data(), &p_.triangles[3 * size_t(t)], J);
-    per_triangle_[size_t(t)] = w[size_t(t)] * distortion(J);
-    distortion_gradient(J, G);
-    triangle_gradient(R, G, w[size_t(t)], &grad6_[6 * size_t(t)]);
+    per_triangle_[size_t(t)] = w[size_t(t)] * solve::distortion(J);
+    solve::distortion_gradient(J, G);
+    solve::triangle_gradient(R, G, w[size_t(t)], &grad6_[6 * size_t(t)]);
   }
   s.energy_before = fixed_order_sum(size_t(nt), per_triangle_.data());
   system_.gather_gradient(grad6_, grad_);
@@ -85,12 +88,12 @@ StepStats Solver::step(std::vector<double>& uv, const std::vector<double>& ref, 
     jacobian(R, uv.data(), &p_.triangles[3 * size_t(t)], J);
     if (proxy == Proxy::Slim) slim_hessian(J, K);
     else cm_hessian(J, K);
-    local_hessian(R, K, w[size_t(t)], &hess21_[21 * size_t(t)]);
+    solve::local_hessian(R, K, w[size_t(t)], &hess21_[21 * size_t(t)]);
   }
   system_.assemble(hess21_);
   s.t_assembly = clock.lap();
 
-  SparseSystem::SolveStats solve;
+  solve::SparseSystem::SolveStats solve;
   const bool solved = system_.solve_reusing(grad_, dir_, kPcgTolerance, solve);
   clock.lap();
   s.factorized = solve.factorized, s.pcg_iterations = solve.pcg_iterations;
@@ -104,7 +107,7 @@ StepStats Solver::step(std::vector<double>& uv, const std::vector<double>& ref, 
 
   double slope = 0;
   for (size_t i = 0; i < dir_.size(); ++i) slope += grad_[i] * dir_[i];
-  s.max_step = max_injective_step(p_.triangles, uv, dir_);
+  s.max_step = solve::max_injective_step(p_.triangles, uv, dir_);
   const double a0 = std::min(1.0, 0.9 * s.max_step);
   if (!(slope < 0) || !(a0 > 0)) {  // no descent direction (cannot happen with an SPD proxy and finite data)
     s.line_search_failed = s.not_descent = true;
@@ -112,7 +115,7 @@ StepStats Solver::step(std::vector<double>& uv, const std::vector<double>& ref, 
     s.t_line_search = clock.lap();
     return s;
   }
-  auto ls = armijo(uv, dir_, s.energy_before, slope, a0,
+  auto ls = solve::armijo(uv, dir_, s.energy_before, slope, a0,
                    [&](const std::vector<double>& x) { return energy(x, ref, w); });
   s.step = ls.step;
   s.energy_after = ls.energy;

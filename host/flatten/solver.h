@@ -7,8 +7,8 @@
 // reference update; the iteration count N_c is the number of linear solves.
 #pragma once
 
-#include "flatten/sparse_system.h"
-#include "flatten/symmetric_dirichlet.h"
+#include "solve/sparse_system.h"
+#include "flatten/problem.h"
 
 #include <vector>
 
@@ -27,7 +27,7 @@ struct StepStats {
   bool not_descent = false;     // the solve gave no descent direction (grad . d not < 0, NaN) or no
                                 // room to move (maximal step 0)
   bool factorization_failed = false;  // the linear system could not be factorized (see failure)
-  const char* failure = "";     // SparseSystem::failure() when factorization_failed
+  const char* failure = "";     // solve::SparseSystem::failure() when factorization_failed
   bool factorized = false;      // the step factorized its system (else PCG on an old factor)
   int pcg_iterations = 0;
   double t_gradient = 0, t_assembly = 0, t_factorization = 0, t_solve = 0, t_line_search = 0;
@@ -47,14 +47,14 @@ class Solver {
                  double gradient_tolerance);
 
   size_t nonzeros() const { return system_.nonzeros(); }
-  // Test hook: see SparseSystem::set_pcg_budget.
+  // Test hook: see solve::SparseSystem::set_pcg_budget.
   void set_pcg_budget(int iterations) { system_.set_pcg_budget(iterations); }
-  // Test hook: see SparseSystem::break_factorization.
+  // Test hook: see solve::SparseSystem::break_factorization.
   void break_factorization(int n) { system_.break_factorization(n); }
 
  private:
   const Problem& p_;
-  SparseSystem system_;
+  solve::SparseSystem system_;
   std::vector<double> per_triangle_, grad6_, hess21_, grad_, dir_;
 };
 

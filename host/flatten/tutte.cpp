@@ -1,7 +1,7 @@
 #include "flatten/tutte.h"
 
 #include "flatten/flatten.h"
-#include "flatten/sparse_system.h"
+#include "solve/sparse_system.h"
 
 #include <Eigen/CholmodSupport>
 #include <Eigen/Sparse>
@@ -59,7 +59,7 @@ std::vector<double> tutte_embedding(size_t nv, const std::vector<uint32_t>& tris
     if (interior_index[v] >= 0) triplets.emplace_back(interior_index[v], interior_index[v], degree[v]);
   Eigen::SparseMatrix<double> L(ni, ni);
   L.setFromTriplets(triplets.begin(), triplets.end());
-  configure_blas_threads();
+  solve::configure_blas_threads();
   Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Lower> solver;
   solver.compute(L);
   if (solver.info() != Eigen::Success) throw FlattenError("Tutte embedding: the Laplacian could not be factorized");

@@ -1,10 +1,12 @@
 #include "perceptual/mesh_stage.h"
 
 #include "core/mat2.h"
+#include "core/parallel.h"
 #include "core/stopwatch.h"
-#include "flatten/line_search.h"
-#include "flatten/sparse_system.h"
-#include "flatten/symmetric_dirichlet.h"
+#include "solve/line_search.h"
+#include "solve/pcg.h"
+#include "solve/sparse_system.h"
+#include "solve/triangle_energy.h"
 
 #include <algorithm>
 #include <cmath>
@@ -16,7 +18,6 @@ namespace uvpress::perceptual {
 
 namespace {
 
-using flatten::worth_threads;
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
 // Per-triangle data of the local step (indices of active triangles).
@@ -80,8 +81,8 @@ double global_energy_active(const Geometry& g, const std::vector<double>& T, con
     scratch[size_t(a)] = fit, scratch[size_t(n + a)] = bar;
   }
   if (bad) return kInf;
-  const double rs = flatten::fixed_order_sum(size_t(n), scratch.data());
-  const double br = flatten::fixed_order_sum(size_t(n), scratch.data() + n);
+  const double rs = fixed_order_sum(size_t(n), scratch.data());
+  const double br = fixed_order_sum(size_t(n), scratch.data() + n);
   if (e_rs) *e_rs = w_rs * rs;
   if (e_bar) *e_bar = w_b * br;
   return w_rs * rs + w_b * br;
@@ -101,7 +102,7 @@ inline bool triangle_derivatives(const Geometry& g, size_t a, const double* uv, 
   const double cof[4] = {J[3], -J[2], -J[1], J[0]};  // d det / d vec(J)
   double G[4];
   for (int k = 0; k < 4; ++k) G[k] = 2 * w_rs * (J[k] - T[k]) + w_b * d1 * cof[k];
-  flatten::triangle_gradient(Ri, G, 1.0, grad6);
+  solve::triangle_gradient(Ri, G, 1.0, grad6);
   if (bar21 && active) {
     // w_b (B'' cof cof^T + |B'| P_anti): Hess(det) has eigenvalues +1 on the similarities
     // and -1 on the anti-similarities (P_anti projects onto them); B' < 0, so B' Hess(det)
@@ -112,7 +113,7 @@ inline bool triangle_derivatives(const Geometry& g, size_t a, const double* uv, 
       for (int c = 0; c < 4; ++c) K[4 * r + c] = b2 * cof[r] * cof[c];
     K[0] += b1, K[3] -= b1, K[12] -= b1, K[15] += b1;
     K[5] += b1, K[6] += b1, K[9] += b1, K[10] += b1;
-    flatten::local_hessian(Ri, K, 1.0, bar21);
+    solve::local_hessian(Ri, K, 1.0, bar21);
   }
   return active;
 }
@@ -157,7 +158,7 @@ class MeshStage {
     }
     base21_.resize(21 * n);
     const double K[16] = {2 * o.w_rs, 0, 0, 0, 0, 2 * o.w_rs, 0, 0, 0, 0, 2 * o.w_rs, 0, 0, 0, 0, 2 * o.w_rs};
-    for (size_t a = 0; a < n; ++a) flatten::local_hessian(&g.rinv[4 * a], K, 1.0, &base21_[21 * a]);
+    for (size_t a = 0; a < n; ++a) solve::local_hessian(&g.rinv[4 * a], K, 1.0, &base21_[21 * a]);
     e19_.resize(n);
     w_b_ = o.barrier_weight * o.w_rs;
   }
@@ -213,7 +214,7 @@ class MeshStage {
     }
   }
 
-  double energy19() const { return flatten::fixed_order_sum(e19_.size(), e19_.data()); }
+  double energy19() const { return fixed_order_sum(e19_.size(), e19_.data()); }
   double barrier_energy(const std::vector<double>& uv) {  // w_b E_barrier
     double e_bar = 0;
     global_energy_active(g_, T_, tg_.threshold, o_.w_rs, w_b_, uv, scratch_, nullptr, &e_bar);
@@ -264,7 +265,7 @@ class MeshStage {
         res.cg_iterations += pcg();
       } else {  // many barriers: factorize the full Hessian (a second system; the base stays)
         if (!full_) {
-          full_ = std::make_unique<flatten::SparseSystem>(g_.vertex_count, g_.tris);
+          full_ = std::make_unique<solve::SparseSystem>(g_.vertex_count, g_.tris);
           // The hook counts factorizations over both systems; the base has used one.
           if (o_.test_break_factorization > 1) full_->break_factorization(o_.test_break_factorization - res.factorizations);
         }
@@ -293,9 +294,9 @@ class MeshStage {
         res.t_line_search += clock.lap();
         break;
       }
-      const double a_max = flatten::max_injective_step(g_.tris, uv, dir_);
+      const double a_max = solve::max_injective_step(g_.tris, uv, dir_);
       const double a0 = std::min(1.0, 0.9 * a_max);
-      const auto ls = flatten::armijo(uv, dir_, f0, slope, a0, F);
+      const auto ls = solve::armijo(uv, dir_, f0, slope, a0, F);
       ++res.newton_steps;
       const bool exact = active == 0 && ls.step == 1 && barrier_energy(uv) == 0;  // minimizer of the quadratic
       res.t_line_search += clock.lap();
@@ -336,42 +337,23 @@ class MeshStage {
   }
 
   // H dir = -grad by conjugate gradients preconditioned with the base factorization,
-  // from dir = 0. Returns the iterations.
+  // from dir = 0 (solve/pcg.h). Inexact Newton: the preconditioned residual norm down by
+  // 1e-2 is enough. Returns the iterations.
   int pcg() {
-    // Inexact Newton: the preconditioned residual norm down by kRelative is enough.
     constexpr int kMaxIterations = 20;
     constexpr double kRelative = 1e-2;
     const size_t m = grad_.size();
-    auto dot = [m](const std::vector<double>& p, const std::vector<double>& q) {
-      double s = 0;
-      for (size_t i = 0; i < m; ++i) s += p[i] * q[i];
-      return s;
-    };
-    r_.assign(m, 0.0);
-    neg_r_.resize(m);
-    for (size_t i = 2; i < m; ++i) r_[i] = -grad_[i];
-    dir_.assign(m, 0.0);
-    system_.solve(grad_, z_);  // M^-1 r
-    p_ = z_;
-    double rz = dot(r_, z_);
-    const double rz0 = rz;
-    int it = 0;
-    while (it < kMaxIterations && rz > 0) {
-      apply_hessian(p_, Ap_);
-      const double pAp = dot(p_, Ap_);
-      if (!(pAp > 0)) break;
-      const double alpha = rz / pAp;
-      for (size_t i = 0; i < m; ++i) dir_[i] += alpha * p_[i], r_[i] -= alpha * Ap_[i];
-      ++it;
-      for (size_t i = 0; i < m; ++i) neg_r_[i] = -r_[i];
-      system_.solve(neg_r_, z_);
-      const double rz_next = dot(r_, z_);
-      if (!(rz_next > kRelative * kRelative * rz0)) break;
-      const double beta = rz_next / rz;
-      rz = rz_next;
-      for (size_t i = 0; i < m; ++i) p_[i] = z_[i] + beta * p_[i];
-    }
-    return it;
+    rhs_.assign(m, 0.0);
+    for (size_t i = 2; i < m; ++i) rhs_[i] = -grad_[i];
+    // The base factor pins vertex 0 (sparse_system.h): M^-1 r = solve(-r).
+    const auto res = solve::pcg([this](const std::vector<double>& x, std::vector<double>& y) { apply_hessian(x, y); },
+                                [this](const std::vector<double>& r, std::vector<double>& z) {
+                                  neg_r_.resize(r.size());
+                                  for (size_t i = 0; i < r.size(); ++i) neg_r_[i] = -r[i];
+                                  system_.solve(neg_r_, z);
+                                },
+                                rhs_, dir_, kRelative, kMaxIterations, pcg_work_);
+    return res.iterations;
   }
 
   // The first failure is the one reported.
@@ -395,12 +377,13 @@ class MeshStage {
   const Geometry& g_;
   const Targets& tg_;
   const MeshStageOptions& o_;
-  flatten::SparseSystem system_;
+  solve::SparseSystem system_;
   std::vector<int> k_;
   std::vector<double> R_, S_, T_, e19_;
-  std::unique_ptr<flatten::SparseSystem> full_;
+  std::unique_ptr<solve::SparseSystem> full_;
   std::vector<double> base21_, bar21_, hess21_, grad6_, grad_, dir_, scratch_, y6_;
-  std::vector<double> r_, z_, p_, Ap_, neg_r_;
+  std::vector<double> rhs_, neg_r_;  // PCG: -grad pinned, and -r for the base solve
+  solve::PcgWork pcg_work_;
   std::vector<char> active_;
   double w_b_ = 0;
   bool base_ready_ = false, base_ok_ = false;

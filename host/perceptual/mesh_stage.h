@@ -20,8 +20,8 @@
 // x >= s_i (C2), +inf for x <= 0, threshold s_i = barrier_threshold * det S-bar_i. Damped
 // Newton: exact Hessian of the fit term, barrier Hessian B'' cof cof^T + |B'| P_anti (its
 // indefinite part B' Hess(det) clamped to PSD), on the fixed pattern of
-// flatten::SparseSystem (vertex 0 pinned: the translation null space), then the maximal
-// non-inverting step and Armijo backtracking (flatten::max_injective_step, flatten::armijo).
+// solve::SparseSystem (vertex 0 pinned: the translation null space), then the maximal
+// non-inverting step and Armijo backtracking (solve::max_injective_step, solve::armijo).
 // The fit term's matrix depends on the input UVs only and is factorized once per chart:
 // with no active barrier the Newton step is one solve with it (exact); with a few active
 // barriers, PCG preconditioned by it; with more, a numeric refactorization of the full
@@ -42,7 +42,7 @@
 // have no Jacobian: they are "passive" - no energy, no barrier, not checked for flips - and
 // their vertices move with the rest. Charts should be one connected piece (only vertex 0 is
 // pinned). Deterministic: per-triangle loops are OpenMP static with fixed-order sums, and
-// CHOLMOD runs with BLAS on one thread (flatten::configure_blas_threads).
+// CHOLMOD runs with BLAS on one thread (solve::configure_blas_threads).
 #pragma once
 
 #include <array>

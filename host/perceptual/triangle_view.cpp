@@ -13,15 +13,6 @@ namespace uvpress::perceptual {
 
 using Vec3 = Eigen::Vector3d;
 
-std::vector<float> luminance_plane(const Image& img) {
-  std::vector<float> y(size_t(img.width) * img.height);
-  for (size_t i = 0; i < y.size(); ++i) {
-    const float* px = &img.pixels[i * img.channels];
-    y[i] = img.channels >= 3 ? 0.299f * px[0] + 0.587f * px[1] + 0.114f * px[2] : px[0];
-  }
-  return y;
-}
-
 namespace {
 
 constexpr double kMaxNeighbourTexelsPerPixel = 8;  // see the ring loop in make_triangle_views

@@ -13,10 +13,6 @@
 
 namespace uvpress::perceptual {
 
-// GMSD step 1 on a decoded texture: Y = 0.299 R + 0.587 G + 0.114 B on the stored values
-// (grey images: the value itself; alpha ignored).
-std::vector<float> luminance_plane(const Image& image);
-
 struct TriangleViewInput {
   const float* positions = nullptr;  // x y z per vertex
   size_t vertex_count = 0;

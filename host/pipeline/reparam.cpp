@@ -808,7 +808,7 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
       const double c = o.size > 0 ? double(o.size) * o.size * std::min(W, H) / std::max(W, H) / (W * H) : o.cost;
       rate_scale = std::sqrt(std::min(1.0, c));
     }
-    std::vector<float> luminance = perceptual::luminance_plane(driver);
+    std::vector<float> luminance = luminance_plane(driver);
 
     // Charts of every UV set, with the triangle stage's targets.
     std::vector<Chart>& charts = P.charts;

@@ -76,7 +76,7 @@ TEST_CASE("render_mesh: Vulkan (lavapipe, validation on) matches the CPU oracle"
   UVPRESS_LAVAPIPE_OR_SKIP(vk);
   auto cpu = engine::make_cpu_engine({});
   DemoMesh d = demo();
-  const std::vector<float> lum = perceptual::luminance_plane(d.texture);
+  const std::vector<float> lum = luminance_plane(d.texture);
   for (bool repeat : {false, true})
     for (uint32_t channels : {1u, 3u}) {
       const std::vector<float>& tex = channels == 1 ? lum : d.texture.pixels;

@@ -152,7 +152,7 @@ TEST_CASE("render_mesh: Vulkan (lavapipe, validation on) matches the CPU oracle 
       std::vector<float> chain;
       const uint32_t levels = engine::mip_chain_levels(tex.width, tex.height);
       for (const Image& l : eval::mip_chain(tex, levels)) {
-        const auto y = perceptual::luminance_plane(l);
+        const auto y = luminance_plane(l);
         if (channels == 1) chain.insert(chain.end(), y.begin(), y.end());
         else chain.insert(chain.end(), l.pixels.begin(), l.pixels.end());
       }
@@ -182,7 +182,7 @@ TEST_CASE("render_mesh: a view rendered as 2 x 2 tiles is the whole view, triang
   io::GltfFile file = pipeline::make_demo_asset({2, 128});  // 8 large triangles: most cross tile borders
   const io::Asset asset = io::build_asset(file);
   const Image tex = io::decode_image(file.image_bytes[0], "demo");
-  const auto y = perceptual::luminance_plane(tex);
+  const auto y = luminance_plane(tex);
   const auto& p = asset.primitives.at(0);
   const auto cams = eval::dodecahedron_cameras(p.positions.data(), p.vertex_count());
   engine::MeshRenderDesc d;

@@ -9,8 +9,10 @@
 #include "flatten/progressive.h"
 #include "flatten/slim.h"
 #include "flatten/solver.h"
-#include "flatten/sparse_system.h"
-#include "flatten/symmetric_dirichlet.h"
+#include "solve/sparse_system.h"
+#include "core/parallel.h"
+#include "flatten/problem.h"
+#include "solve/triangle_energy.h"
 #include "flatten/tutte.h"
 #include "io/mesh_io.h"
 #include "support.h"
@@ -24,6 +26,7 @@
 
 using namespace uvpress;
 using namespace uvpress::flatten;
+using namespace uvpress::solve;
 
 namespace {
 

@@ -1,12 +1,12 @@
-#include "flatten/line_search.h"
+#include "solve/line_search.h"
 
-#include "flatten/symmetric_dirichlet.h"
+#include "core/parallel.h"
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
 
-namespace uvpress::flatten {
+namespace uvpress::solve {
 
 namespace {
 
@@ -66,4 +66,4 @@ LineSearchResult armijo(std::vector<double>& uv, const std::vector<double>& d, d
   return {0, e0};
 }
 
-}  // namespace uvpress::flatten
+}  // namespace uvpress::solve

@@ -1,7 +1,8 @@
-#include "flatten/sparse_system.h"
+#include "solve/sparse_system.h"
 
+#include "core/parallel.h"
 #include "core/stopwatch.h"
-#include "flatten/symmetric_dirichlet.h"
+#include "solve/triangle_energy.h"
 
 #include <algorithm>
 #include <cmath>
@@ -10,12 +11,9 @@
 #include <dlfcn.h>
 #include <mutex>
 
-namespace uvpress::flatten {
+namespace uvpress::solve {
 
 namespace {
-// Row-major lower triangle of a 6x6: index of (a, b), a >= b.
-constexpr int lower_index(int a, int b) { return a * (a + 1) / 2 + b; }
-
 // PCG iterations one solve may spend on an old factor before refactorizing. A PCG iteration
 // is two triangular solves (4 lnz flops) and a product with H (4 nnz flops); a numeric
 // factorization is `fl` flops. The solves are memory-bound BLAS-2 and run about
@@ -82,7 +80,7 @@ SparseSystem::SparseSystem(size_t nv, const std::vector<uint32_t>& tris) : n_(2 
       for (int b = 0; b <= a; ++b) {
         const long ga = 2 * long(tris[3 * t + size_t(a / 2)]) + a % 2, gb = 2 * long(tris[3 * t + size_t(b / 2)]) + b % 2;
         const uint32_t k = position(std::max(ga, gb), std::min(ga, gb));
-        target[21 * t + size_t(lower_index(a, b))] = k;
+        target[21 * t + size_t(hess21_index(a, b))] = k;
         ++gather_start_[k + 1];
       }
   for (size_t k = 0; k < nnz; ++k) gather_start_[k + 1] += gather_start_[k];
@@ -239,48 +237,14 @@ void SparseSystem::precondition(const std::vector<double>& r, std::vector<double
 }
 
 bool SparseSystem::pcg(const std::vector<double>& grad, std::vector<double>& d, double tolerance) {
-  auto dot = [this](const std::vector<double>& a, const std::vector<double>& b) {
-    double s = 0;
-    for (size_t i = 0; i < n_; ++i) s += a[i] * b[i];
-    return s;
-  };
-  r_.resize(n_);
-  for (size_t i = 0; i < n_; ++i) r_[i] = -grad[i];
-  r_[0] = r_[1] = 0;
-  d.assign(n_, 0.0);
-  precondition(r_, z_);
-  p_ = z_;
-  double rz = dot(r_, z_);
-  const double stop = tolerance * tolerance * rz;
-  for (int it = 0; rz > stop; ++it) {
-    if (it == pcg_budget_) return false;
-    multiply(p_, q_);
-    const double pq = dot(p_, q_);
-    if (!(pq > 0)) return false;  // not SPD, or not finite: the factorization will say which
-    const double alpha = rz / pq;
-    for (size_t i = 0; i < n_; ++i) d[i] += alpha * p_[i], r_[i] -= alpha * q_[i];
-    ++pcg_iterations_;
-    precondition(r_, z_);
-    const double rz_next = dot(r_, z_);
-    const double beta = rz_next / rz;
-    rz = rz_next;
-    for (size_t i = 0; i < n_; ++i) p_[i] = z_[i] + beta * p_[i];
-  }
-  return std::isfinite(rz);
+  rhs_.resize(n_);
+  for (size_t i = 0; i < n_; ++i) rhs_[i] = -grad[i];
+  rhs_[0] = rhs_[1] = 0;
+  const PcgResult res = solve::pcg([this](const std::vector<double>& x, std::vector<double>& y) { multiply(x, y); },
+                                   [this](const std::vector<double>& r, std::vector<double>& z) { precondition(r, z); },
+                                   rhs_, d, tolerance, pcg_budget_, work_);
+  pcg_iterations_ += res.iterations;
+  return res.stop == PcgStop::Converged;
 }
 
-void local_hessian(const double* Rinv, const double K[16], double w, double h[21]) {
-  const double c[3][2] = {{-(Rinv[0] + Rinv[2]), -(Rinv[1] + Rinv[3])}, {Rinv[0], Rinv[1]}, {Rinv[2], Rinv[3]}};
-  // T[(r,j)][(n,s)] = sum_k K[(r,j),(s,k)] c[n][k]
-  double T[4][6];
-  for (int rj = 0; rj < 4; ++rj)
-    for (int n = 0; n < 3; ++n)
-      for (int s = 0; s < 2; ++s) T[rj][2 * n + s] = K[4 * rj + 2 * s] * c[n][0] + K[4 * rj + 2 * s + 1] * c[n][1];
-  for (int a = 0; a < 6; ++a) {
-    const int m = a / 2, r = a % 2;
-    for (int b = 0; b <= a; ++b)
-      h[lower_index(a, b)] = w * (c[m][0] * T[2 * r][b] + c[m][1] * T[2 * r + 1][b]);
-  }
-}
-
-}  // namespace uvpress::flatten
+}  // namespace uvpress::solve

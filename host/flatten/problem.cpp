@@ -1,4 +1,4 @@
-#include "flatten/symmetric_dirichlet.h"
+#include "flatten/problem.h"
 
 #include "flatten/flatten.h"
 
@@ -64,22 +64,6 @@ std::vector<double> area_weights(const Problem& p) {
   std::vector<double> w(p.area.size());
   for (size_t t = 0; t < w.size(); ++t) w[t] = std::max(p.area[t], floor);
   return w;
-}
-
-double fixed_order_sum(size_t n, const double* v) {
-  constexpr size_t kBlock = 4096;
-  const size_t blocks = (n + kBlock - 1) / kBlock;
-  std::vector<double> partial(blocks);
-#pragma omp parallel for schedule(static) if (worth_threads(long(n)))
-  for (long b = 0; b < long(blocks); ++b) {
-    double s = 0;
-    const size_t end = std::min(n, size_t(b + 1) * kBlock);
-    for (size_t i = size_t(b) * kBlock; i < end; ++i) s += v[i];
-    partial[size_t(b)] = s;
-  }
-  double s = 0;
-  for (double x : partial) s += x;
-  return s;
 }
 
 }  // namespace uvpress::flatten

@@ -9,7 +9,7 @@
 #include <functional>
 #include <vector>
 
-namespace uvpress::flatten {
+namespace uvpress::solve {
 
 // min over triangles of the first a > 0 at which the triangle degenerates; +inf if none.
 double max_injective_step(const std::vector<uint32_t>& triangles, const std::vector<double>& uv,
@@ -25,4 +25,4 @@ struct LineSearchResult {
 LineSearchResult armijo(std::vector<double>& uv, const std::vector<double>& d, double e0, double slope, double a0,
                         const std::function<double(const std::vector<double>&)>& energy);
 
-}  // namespace uvpress::flatten
+}  // namespace uvpress::solve

@@ -30,6 +30,8 @@
 // the alpha term can leave a triangle's rotation direction without curvature.
 #pragma once
 
+#include "solve/pcg.h"
+
 #include <Eigen/CholmodSupport>
 #include <Eigen/Sparse>
 
@@ -38,14 +40,14 @@
 #include <string>
 #include <vector>
 
-namespace uvpress::flatten {
+namespace uvpress::solve {
 
 class SparseSystem {
  public:
   SparseSystem(size_t vertex_count, const std::vector<uint32_t>& triangles);
 
   // hess21[21 t + k]: lower triangle of triangle t's 6x6 Hessian (local dofs u0 v0 u1 v1
-  // u2 v2), row-major: (0,0) (1,0) (1,1) (2,0) ... (5,5).
+  // u2 v2), row-major: (0,0) (1,0) (1,1) (2,0) ... (5,5) (triangle_energy.h's hess21_index).
   void assemble(const std::vector<double>& hess21);
   // grad6[6 t + k] -> grad (2V), fixed order.
   void gather_gradient(const std::vector<double>& grad6, std::vector<double>& grad) const;
@@ -94,7 +96,8 @@ class SparseSystem {
   long pcg_iterations_ = 0;
   bool factored_ = false;  // solver_ holds the factor of some earlier H
   bool skip_attempt_ = false;  // the last PCG attempt failed
-  std::vector<double> r_, z_, p_, q_;  // PCG work vectors
+  std::vector<double> rhs_;  // -grad, pinned
+  PcgWork work_;
 
   double shift() const { return 1e-10 * diagonal_mean_; }
   // y = (H + shift) x for the lower triangle stored in matrix_: sequential, fixed order.
@@ -112,8 +115,4 @@ class SparseSystem {
 // The per-triangle OpenMP loops are bit-identical for any OMP_NUM_THREADS.
 void configure_blas_threads();
 
-// Local 6x6 Hessian from a 4x4 Hessian K in vec(J) = (J00 J01 J10 J11) and Rinv:
-// H[(m,r),(n,s)] = sum_jk c[m][j] K[(r,j),(s,k)] c[n][k], scaled by w. Writes 21 entries.
-void local_hessian(const double* Rinv, const double K[16], double w, double h21[21]);
-
-}  // namespace uvpress::flatten
+}  // namespace uvpress::solve
