@@ -49,7 +49,7 @@ AssetWork load_asset(const std::string& spec) {
       w.primitive = asset.primitives[size_t(use.primitive)];
       w.tex_coord = use.tex_coord;
       w.texture = io::decode_image(file.image_bytes[size_t(image.index)], spec);
-      w.luminance = perceptual::luminance_plane(w.texture);
+      w.luminance = luminance_plane(w.texture);
       a.parts.push_back(std::move(w));
     }
   if (a.parts.empty()) throw InputError(spec, "no primitive samples a baseColor texture");

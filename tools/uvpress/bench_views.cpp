@@ -22,7 +22,7 @@ void bench_views(const Globals& g, const std::vector<uint32_t>& batches, uint32_
   io::Asset asset = io::build_asset(demo);
   const io::Primitive& p = asset.primitives.at(0);
   Image tex = io::decode_image(demo.image_bytes[0], "demo");
-  std::vector<float> lum = perceptual::luminance_plane(tex);
+  std::vector<float> lum = luminance_plane(tex);
   perceptual::TriangleViewInput in{p.positions.data(), p.vertex_count(), p.indices.data(), p.triangle_count(),
                                    p.uv_sets[0].uv.data(), tex.width, tex.height};
   engine::ViewSetDesc desc = perceptual::make_triangle_views(in, size).desc;
