@@ -171,7 +171,13 @@ struct Prepared {
   // output keeps the saving the input already had.
   std::vector<std::vector<uint32_t>> units;  // chart indices per unit
   std::vector<uint32_t> unit_of_chart;
+  std::vector<double> unit_texels;  // source texel centres under each unit (shared ones once)
   size_t shared_charts = 0;
+  // Per packing unit its loss at kSlopeScales, surface weight and source texels, for the
+  // equal-slope allocation over whole units (measure_unit_losses; empty: not measured).
+  perceptual::LossCurves unit_loss;
+  std::vector<double> unit_area, unit_weight;
+  double unit_cost = 1;  // the requested cost as a share of the source's texels (rate control's)
   // ReparamOptions::isometric: the charts flattened once (pipeline/isometric_charts.h), and
   // the packing units with each flattened chart on its own (the others keep their grouping).
   IsometricCharts isometric;
@@ -222,6 +228,9 @@ void find_shared_texels(Prepared& P) {
   for (const auto& unit : P.units)
     if (unit.size() > 1)
       for (uint32_t c : unit) P.charts[c].shared = true, ++P.shared_charts;
+  P.unit_texels.assign(P.units.size(), 0.0);
+  for (uint32_t o : owner)
+    if (o != UINT32_MAX) P.unit_texels[P.unit_of_chart[o]] += 1;
 }
 
 // Flattens every chart of `P` for the isometric layout (a folded chart too: the solve does
@@ -267,6 +276,79 @@ void prepare_isometric(const io::Asset& asset, const Layout& L, Prepared& P, con
 // reshaping at all (`repack`: the input's charts, only repacked). The most aggressive targets are not
 // always the best at a given cost (the mesh stage's compromise and the re-bake both lose
 // detail), so reparam builds a few and keeps the one that scores best on screen.
+// A triangle's share of the screen: its surface area.
+double surface_area(const io::Primitive& prim, uint32_t t) {
+  const uint32_t* ix = &prim.indices[3 * size_t(t)];
+  const float* a = &prim.positions[3 * size_t(ix[0])];
+  const float* b = &prim.positions[3 * size_t(ix[1])];
+  const float* c = &prim.positions[3 * size_t(ix[2])];
+  const double e1[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, e2[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+  const double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+  return 0.5 * std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+}
+
+// The shrinks at which the equal-slope allocations measure each triangle's loss.
+const std::vector<double> kSlopeScales = {0.125, 0.25, 0.35, 0.5, 0.6, 0.707, 0.85, 1.0};
+
+// Each packing unit's loss curve for the equal-slope allocation over whole units
+// (perceptual/rate_allocation.h), each kept in its input shape at one uniform scale: the
+// only reshaping a unit whose charts share texels (Duck's mirrored halves) allows without
+// giving that sharing up, and the plainest one for any chart (no mesh stage, no new
+// distortion). A unit's loss at scale s is the surface-weighted mean of its triangles'
+// losses at J = s I, measured on the triangle stage's views over an even sample of at most
+// kSample of its triangles; its weight is its surface area, its cost its source texels.
+void measure_unit_losses(const io::Asset& asset, const Layout& L, Prepared& P, engine::Engine& engine,
+                         const std::vector<float>& luminance, const perceptual::TriangleStageOptions& options) {
+  constexpr size_t kSample = 48;
+  const size_t nu = P.units.size(), ns = kSlopeScales.size();
+  if (nu < 2) return;
+  // Per unit its triangles (UV set, triangle) in chart order; the sampled ones per UV set.
+  std::vector<std::vector<std::pair<size_t, uint32_t>>> tris(nu);
+  std::vector<double> surface(nu, 0.0);
+  for (size_t u = 0; u < nu; ++u)
+    for (uint32_t c : P.units[u])
+      for (uint32_t t : P.charts[c].triangles) {
+        const size_t si = P.charts[c].uv_set;
+        tris[u].push_back({si, t});
+        surface[u] += surface_area(asset.primitives[size_t(L.uv_sets[si].primitive)], t);
+      }
+  std::vector<std::vector<uint32_t>> which(L.uv_sets.size());
+  std::vector<std::vector<std::pair<size_t, size_t>>> slot(L.uv_sets.size());  // (unit, k) per sampled triangle
+  for (size_t u = 0; u < nu; ++u) {
+    const size_t n = tris[u].size(), take = std::min(n, kSample);
+    for (size_t k = 0; k < take; ++k) {
+      const auto [si, t] = tris[u][k * n / take];
+      which[si].push_back(t), slot[si].push_back({u, k});
+    }
+  }
+  // g[u][j]: the unit's surface-weighted loss at kSlopeScales[j].
+  std::vector<std::vector<double>> g(nu, std::vector<double>(ns, 0.0));
+  std::vector<double> sampled_surface(nu, 0.0);
+  for (size_t si = 0; si < L.uv_sets.size(); ++si) {
+    if (which[si].empty()) continue;
+    const io::Primitive& prim = asset.primitives[size_t(L.uv_sets[si].primitive)];
+    const std::vector<float>& uv = prim.uv_sets[size_t(L.uv_sets[si].tex_coord)].uv;
+    perceptual::TriangleViewInput in{prim.positions.data(), prim.vertex_count(), prim.indices.data(),
+                                     prim.triangle_count(), uv.data(), P.driver.width, P.driver.height};
+    std::vector<double> w(which[si].size());
+    for (size_t k = 0; k < w.size(); ++k) {
+      w[k] = surface_area(prim, which[si][k]);
+      sampled_surface[slot[si][k].first] += w[k];
+    }
+    for (size_t j = 0; j < ns; ++j) {
+      const double s = kSlopeScales[j];
+      const std::vector<double> loss = perceptual::measure_triangles(engine, in, luminance, options, {s, 0, 0, s}, which[si]);
+      for (size_t k = 0; k < loss.size(); ++k) g[slot[si][k].first][j] += w[k] * loss[k];
+    }
+  }
+  P.unit_loss.scales = kSlopeScales;
+  for (size_t u = 0; u < nu; ++u) {
+    for (size_t j = 0; j < ns; ++j) P.unit_loss.loss.push_back(sampled_surface[u] > 0 ? g[u][j] / sampled_surface[u] : 0.0);
+    P.unit_area.push_back(std::max(P.unit_texels[u], 1.0));
+    P.unit_weight.push_back(surface[u]);
+  }
+}
+
 struct Candidate {
   std::string name;
   bool reshape = true;
@@ -286,6 +368,8 @@ struct Candidate {
   bool wide_gutter = false;
   // Every chart flattened at one density instead (ReparamOptions::isometric).
   bool isometric = false;
+  // Charts unreshaped, each packing unit at its own uniform scale (Prepared::unit_scale).
+  bool unit_scale = false;
 };
 
 // What one candidate came to, in the output file it was written into.
@@ -333,6 +417,81 @@ double smallest_stretch(const double* a, const double* b, const double* c, const
   return std::sqrt(std::max(0.0, 0.5 * (fro - std::sqrt(std::max(0.0, fro * fro - 4 * dm * dm)))));
 }
 
+// The packing budget of a candidate: --cost of the source's image texels (or --size), the
+// gutter as asked or mip-safe for the image the budget buys (its texels are known before
+// packing: --cost of the source's, --size N at the source's aspect; --max-gmsd bakes at the
+// source's size and shrinks the gutters with the image). The caller sets s_max and edges.
+atlas::BudgetOptions budget_options(const ReparamOptions& o, const Candidate& cand, double W, double H) {
+  atlas::BudgetOptions budget;
+  budget.cost = o.max_gmsd > 0 ? 1.0 : o.cost, budget.size = o.max_gmsd > 0 ? 0 : o.size;
+  budget.pot = o.power_of_two;
+  budget.keep_aspect = o.keep_aspect;
+  budget.measure = atlas::CostMeasure::ImageTexels;  // --cost is about texture memory
+  const double budget_texels = o.max_gmsd > 0 ? double(W) * H
+                               : o.size > 0    ? double(o.size) * o.size * std::min(W, H) / std::max(W, H)
+                                               : o.cost * W * H;
+  budget.pack.gutter = o.gutter != ReparamOptions::kAutoGutter ? o.gutter
+                       : cand.wide_gutter                      ? atlas::mip_safe_gutter(budget_texels, 32, 4, 32)
+                                                               : atlas::mip_safe_gutter(budget_texels);
+  budget.pack.block = o.block;
+  return budget;
+}
+
+// Uniform scales per packing unit (Prepared::unit_loss), relative to the largest: the
+// equal-slope allocation at the requested cost (Prepared::unit_cost), which the packer
+// scales whole to the budget. Where that leaves budget unspent (the largest unit already at
+// the source density: the packer stops there), the allocation's share c is raised by
+// bisection until the units just fill the budget, so the smaller ones get the texels back.
+// A curve point below the requested cost keeps the requested cost's shape, scaled down: the
+// layout reparam chose, at another budget. The probe packing ignores whole-texel snapping
+// and the copies' edge ring, which realize() adds; 10 steps of bisection.
+struct UnitScales {
+  std::vector<double> scale;  // per unit, the largest 1
+  double cost = 0;            // the allocation's share of the units' source texels
+};
+UnitScales unit_scales_filling(const Prepared& P, const io::Asset& asset, const Layout& L, const ReparamOptions& o,
+                               const Candidate& cand) {
+  auto scales_at = [&P](double c) {
+    std::vector<double> k = perceptual::allocate_by_equal_slope(P.unit_loss, P.unit_area, P.unit_weight, c).scale;
+    const double top = *std::max_element(k.begin(), k.end());
+    for (double& x : k) x /= top;
+    return k;
+  };
+  atlas::BudgetOptions budget = budget_options(o, cand, P.W, P.H);
+  budget.s_max = 1;
+  const auto repeats = repeating_axes(asset, L);
+  budget.pack.edge_x = atlas::edge_gutter(budget.pack.gutter, repeats[0]);
+  budget.pack.edge_y = atlas::edge_gutter(budget.pack.gutter, repeats[1]);
+  // Whether the units at scales k fit the budget with room to spare (packed at s_max = 1).
+  auto spare = [&](const std::vector<double>& k) {
+    std::vector<atlas::ChartShape> shapes(P.units.size());
+    for (size_t u = 0; u < P.units.size(); ++u)
+      for (uint32_t c : P.units[u]) {
+        const uint32_t base = uint32_t(shapes[u].points.size() / 2);
+        for (double x : P.charts[c].uv) shapes[u].points.push_back(x * k[u]);
+        for (uint32_t l : P.charts[c].local) shapes[u].triangles.push_back(base + l);
+      }
+    const atlas::AtlasChoice choice = atlas::choose_atlas(shapes, P.driver.width, P.driver.height, P.old_used, budget);
+    return choice.packing.ok && choice.packing.scale >= 1 - 1e-3;
+  };
+  double lo = P.unit_cost, hi = 1;
+  if (!spare(scales_at(lo))) return {scales_at(lo), lo};  // the packer scales it down whole
+  if (spare(scales_at(hi))) return {scales_at(hi), hi};   // the whole source fits: the repack
+  for (int i = 0; i < 10; ++i) {
+    const double mid = std::sqrt(lo * hi);
+    (spare(scales_at(mid)) ? lo : hi) = mid;
+  }
+  return {scales_at(lo), lo};
+}
+
+// Whether the units' allocation at share c leaves any unit below 0.99 of the largest.
+bool unit_scales_differ(const Prepared& P, double c) {
+  if (P.unit_loss.loss.empty()) return false;
+  const perceptual::RateAllocation a = perceptual::allocate_by_equal_slope(P.unit_loss, P.unit_area, P.unit_weight, c);
+  const double top = *std::max_element(a.scale.begin(), a.scale.end());
+  return *std::min_element(a.scale.begin(), a.scale.end()) < 0.99 * top;
+}
+
 // Builds one candidate into `file` (a copy of the input): mesh stage per chart, packing
 // into the budget, re-bake of every image of every prepared layout, new UV accessors.
 Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, const std::vector<Prepared>& prepared,
@@ -350,6 +509,15 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
     size_t layout_flips = 0, mesh_failed = 0, overlap_fallback_pairs = 0, outline_kept = 0, outline_failed = 0;
     const bool slope = cand.equal_slope && !P.equal_slope.empty();
     if (slope) jl["equal_slope"] = P.equal_slope_report;
+    UnitScales unit_scales;
+    if (cand.unit_scale && !P.unit_loss.loss.empty()) {
+      unit_scales = unit_scales_filling(P, asset, L, o, cand);
+      const auto& k = unit_scales.scale;
+      jl["unit_scale"] = {{"cost", unit_scales.cost},
+                          {"units", k.size()},
+                          {"scale_quartiles", {quantile(k, 0.25), quantile(k, 0.5), quantile(k, 0.75)}},
+                          {"scale_min", *std::min_element(k.begin(), k.end())}};
+    }
     double outline_blend = 0;
 
     // Mesh stage per chart. Weights floored relative to the whole layout's mean (not only
@@ -387,6 +555,10 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
       const Chart& ch = charts[c];
       if (!cand.reshape || P.results[ch.uv_set].empty() || ch.rigid || ch.shared) {
         new_uv_of[c] = ch.uv;
+        // The unit's uniform scale (about the origin: packing places it), 1 kept exact.
+        const double k = unit_scales.scale.empty() ? 1.0 : unit_scales.scale[unit_of_chart[c]];
+        if (k != 1.0)
+          for (double& x : new_uv_of[c]) x *= k;
         continue;
       }
       std::vector<perceptual::TriangleTarget> targets;
@@ -496,22 +668,9 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
         shapes[u].points.insert(shapes[u].points.end(), new_uv_of[c].begin(), new_uv_of[c].end());
         for (uint32_t l : charts[c].local) shapes[u].triangles.push_back(base + l);
       }
-    atlas::BudgetOptions budget;
-    budget.cost = o.max_gmsd > 0 ? 1.0 : o.cost, budget.size = o.max_gmsd > 0 ? 0 : o.size;
-    budget.pot = o.power_of_two;
-    budget.keep_aspect = o.keep_aspect;
+    atlas::BudgetOptions budget = budget_options(o, cand, W, H);
     budget.s_max = s_max;
-    budget.measure = atlas::CostMeasure::ImageTexels;  // --cost is about texture memory
-    // The gutter: as asked, or mip-safe for the image the budget buys (its texels are known
-    // before packing: --cost of the source's, --size N at the source's aspect; --max-gmsd
-    // bakes at the source's size and shrinks the gutters with the image).
-    const double budget_texels = o.max_gmsd > 0 ? double(W) * H
-                                 : o.size > 0    ? double(o.size) * o.size * std::min(W, H) / std::max(W, H)
-                                                 : o.cost * W * H;
-    const uint32_t gutter = o.gutter != ReparamOptions::kAutoGutter ? o.gutter
-                            : cand.wide_gutter                      ? atlas::mip_safe_gutter(budget_texels, 32, 4, 32)
-                                                                    : atlas::mip_safe_gutter(budget_texels);
-    budget.pack.gutter = gutter, budget.pack.block = o.block;
+    const uint32_t gutter = budget.pack.gutter;
     // Every chart brings what the source has around it into half the gutter (whole-texel
     // copies their ring of the source's own neighbours, re-baked charts their maps extended,
     // RebakeOptions::surround): bilinear taps just past a chart's edge, and coarse mip
@@ -922,7 +1081,7 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
     if (o.optimize && o.candidates && rate_scale > 0 && P.tri.optimized > 0) {
       Stopwatch t0;
       perceptual::LossCurves curves;
-      curves.scales = {0.125, 0.25, 0.35, 0.5, 0.6, 0.707, 0.85, 1.0};
+      curves.scales = kSlopeScales;
       std::vector<std::pair<size_t, uint32_t>> where;  // (UV set, triangle) per allocated triangle
       std::vector<double> area, weight;
       for (size_t si = 0; si < L.uv_sets.size(); ++si) {
@@ -943,14 +1102,7 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
           const perceptual::TriangleResult& r = P.results[si][which[k]];
           where.push_back({si, which[k]});
           area.push_back(std::max(r.texel_area, 1e-9));
-          // The triangle's share of the screen: its surface area.
-          const uint32_t* ix = &prim.indices[3 * size_t(which[k])];
-          const float* a = &prim.positions[3 * size_t(ix[0])];
-          const float* b = &prim.positions[3 * size_t(ix[1])];
-          const float* c = &prim.positions[3 * size_t(ix[2])];
-          const double e1[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, e2[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-          const double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
-          weight.push_back(0.5 * std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]));
+          weight.push_back(surface_area(prim, which[k]));
           for (size_t j = 0; j < curves.scales.size(); ++j)
             curves.loss.push_back(curves.scales[j] < 1 ? g[j][k] : r.identity_gmsd);
         }
@@ -964,6 +1116,13 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
                               {"spent", alloc.spent},
                               {"multiplier", alloc.multiplier},
                               {"scale_quartiles", {quantile(alloc.scale, 0.25), quantile(alloc.scale, 0.5), quantile(alloc.scale, 0.75)}}};
+      t_triangle += t0.seconds();
+    }
+    // Uniform scales per packing unit (the `unit-scale` candidate).
+    if (o.optimize && o.candidates && rate_scale > 0) {
+      Stopwatch t0;
+      measure_unit_losses(asset, L, P, engine, luminance, o.triangle);
+      P.unit_cost = rate_scale * rate_scale;
       t_triangle += t0.seconds();
     }
     optimized += P.tri.optimized, infeasible += P.tri.optimized - P.tri.feasible;
@@ -1006,6 +1165,15 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
     }
   }
   if (!reshape || (o.max_gmsd <= 0 && o.candidates)) plans.push_back({"repack", false, 1.0});
+  // The input's charts unreshaped, each packing unit at its own scale: where the signal
+  // sits in a few units (Duck's eye), the smooth ones give their texels to it.
+  bool unit_scales = false;
+  for (const Prepared& P : prepared) unit_scales |= unit_scales_differ(P, P.unit_cost);
+  if (o.max_gmsd <= 0 && o.candidates && unit_scales) {
+    Candidate c{"unit-scale", false, 1.0};
+    c.unit_scale = true;
+    plans.push_back(c);
+  }
   if (o.isometric) {  // flatten --assign: that layout alone
     plans.clear();
     Candidate iso{"isometric", true, 0.0};
@@ -1065,10 +1233,17 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
     if (r.overlaps_new > 0) return;
     if (!have || (r.q >= 0 && r.q < chosen.q)) chosen = std::move(r), file = std::move(f), chosen_plan = c, have = true;
   };
-  for (const Candidate& c : plans) consider(c);
+  // The base plans' scores, for the runner-up below.
+  std::vector<std::pair<double, size_t>> base_scores;
+  for (size_t i = 0; i < plans.size(); ++i) {
+    consider(plans[i]);
+    if (candidates.back()["q"].is_number() && candidates.back()["overlaps_new"] == 0)
+      base_scores.push_back({candidates.back()["q"].get<double>(), i});
+  }
   if (!prepared.empty() && !have)
     throw InputError(file.path, "every layout built has triangles overlapping in UV that did not in the input "
                                 "(see overlaps_new); nothing written");
+  const std::string kept_base = chosen_plan.name;  // the plan the variants below start from
   // The kept layout once more with the least-squares re-bake (the texels whose bilinear
   // reconstruction is closest to the source over the surface), with the unreshaped charts'
   // texels copied and with them solved too: a copy at a fractional scale can blur edges a
@@ -1089,10 +1264,21 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
   // coarse mip levels that views at grazing angles sample, depends on the asset: measured
   // at half the texels, the Duck's repack scores q 0.000675 at 16 texels against 0.000779
   // at 8 (the resize 0.000692), while Fox loses at 8 what it gains at 16.
+  // Built for the kept layout and for the best other plan: two plans that score alike at
+  // the default gutter need not score alike at the wider one (Duck: `unit-scale` and
+  // `repack` 0.000707 and 0.000779 at 8 texels, 0.000710 and 0.000675 at 16).
   if (scorer && o.max_gmsd <= 0 && o.gutter == ReparamOptions::kAutoGutter && o.candidates) {
-    Candidate c = chosen_plan;
-    c.name += "+wide-gutter", c.wide_gutter = true;
-    consider(c);
+    std::vector<Candidate> wide = {chosen_plan};
+    std::sort(base_scores.begin(), base_scores.end());
+    for (const auto& [q, i] : base_scores)
+      if (plans[i].name != kept_base) {
+        wide.push_back(plans[i]);
+        break;
+      }
+    for (Candidate c : wide) {
+      c.name += "+wide-gutter", c.wide_gutter = true;
+      consider(c);
+    }
   }
   if (!o.curve_costs.empty() && scorer) {
     json curve = json::array(), ignored = json::array();
