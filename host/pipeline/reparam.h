@@ -22,7 +22,7 @@ namespace uvpress::pipeline {
 // Which algorithm wrote an output: raised by every change that changes reparam's outputs
 // for the same input and options (layouts, bakes, gutters, encoders), so that a resumed
 // batch redoes what an older algorithm wrote (batch compares it with the options).
-constexpr int kReparamRevision = 5;  // 2: image-edge gutters by sampler, surround in gutters; 3: equal-slope candidates, least squares keeps the surround; 4: the wide-gutter variant; 5: normal-mapped assets scored lit (candidates, guard)
+constexpr int kReparamRevision = 6;  // 2: image-edge gutters by sampler, surround in gutters; 3: equal-slope candidates, least squares keeps the surround; 4: the wide-gutter variant; 5: normal-mapped assets scored lit (candidates, guard); 6: the unit-scale candidate, wide gutters for the best other plan too
 
 struct ReparamOptions {
   double cost = 0.5;       // relative pixel cost c_r of the new textures vs the old (eq. 20-21)

@@ -387,3 +387,49 @@ TEST_CASE("reparam on Duck at half the texels: gutters a mip level cleaner win, 
   CHECK(q_written == Approx(q_wide).epsilon(1e-9));
   CHECK(q_written < report["guard"]["q_resize"].get<double>());
 }
+
+TEST_CASE("reparam on Duck: units that share texels trade density as wholes and beat the plain repack",
+          "[pipeline][reparam][shared][unit-scale]") {
+  // Duck's charts all share texels with their mirrored halves, so none can be reshaped;
+  // the unit-scale candidate still moves texels from its smooth units to the eye's, each
+  // unit at one uniform scale (the equal-slope allocation over whole units). At a quarter
+  // of the texels it scores below the plain repack by more than eval's noise floor, keeps
+  // the mirrored halves on shared texels, and spends the budget (the allocation's share is
+  // raised until the units fill it).
+  if (!test::shared_dir()) UVPRESS_SKIP("../shared is absent");
+  auto engine = engine::make_cpu_engine({});
+  const auto path = *test::shared_dir() / "assets" / "Duck" / "glTF" / "Duck.gltf";
+  const io::GltfFile in = io::load_gltf(path.string());
+  io::GltfFile out = in;
+  pipeline::ReparamOptions o;
+  o.cost = 0.25;
+  o.guard = false;
+  const auto report = pipeline::reparam(out, *engine, o);
+  INFO(report["candidates"].dump());
+  double q_repack = -1, q_units = -1, cost_units = -1;
+  for (const auto& c : report["candidates"]) {
+    if (c["name"] == "repack") q_repack = c["q"].get<double>();
+    if (c["name"] == "unit-scale") q_units = c["q"].get<double>(), cost_units = c["cost_ratio"].get<double>();
+  }
+  REQUIRE(q_repack > 0);
+  REQUIRE(q_units > 0);
+  eval::EvalOptions eo;
+  eo.artifacts = false;
+  eo.cost_grid = {0.25};
+  const double floor = eval::evaluate(in, {}, *engine, eo)["noise_floor"].get<double>();
+  INFO("q unit-scale " << q_units << ", repack " << q_repack << ", noise floor " << floor);
+  CHECK(floor > 0);
+  CHECK(q_units < q_repack - floor);
+  CHECK(cost_units > 0.24);
+  CHECK(cost_units <= 0.25 + 1e-9);
+  CHECK(report["overlaps_new"] == 0);
+  if (report["layout"].get<std::string>().rfind("unit-scale", 0) == 0) {
+    const auto& layout = report["layouts"][0];
+    CHECK(layout["shared_texel_charts"] == 8);
+    const auto& u = layout["unit_scale"];
+    CHECK(u["scale_min"].get<double>() < 0.5);  // smooth units gave texels up ...
+    CHECK(u["scale_quartiles"][2].get<double>() > 0.8);  // ... to the detailed ones, the largest at 1
+    CHECK(u["scale_quartiles"][2].get<double>() <= 1.0);
+    CHECK(u["cost"].get<double>() >= 0.25);
+  }
+}
