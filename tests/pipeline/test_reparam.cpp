@@ -65,6 +65,18 @@ pipeline::ReparamOptions keep_shapes(double cost = 1.0) {
   return o;
 }
 
+// The shared Duck (glTF with its .bin and PNG beside it); the caller skips without ../shared.
+io::GltfFile shared_duck() {
+  return io::load_gltf((*test::shared_dir() / "assets" / "Duck" / "glTF" / "Duck.gltf").string());
+}
+
+// A candidate's q and cost ratio from reparam's report (q -1: not built).
+std::pair<double, double> candidate_score(const nlohmann::ordered_json& report, const std::string& name) {
+  for (const auto& c : report["candidates"])
+    if (c["name"] == name) return {c["q"].get<double>(), c["cost_ratio"].get<double>()};
+  return {-1.0, 0.0};
+}
+
 }  // namespace
 
 TEST_CASE("reparam without optimization at the same cost: the textures look the same through the new UVs",
@@ -353,7 +365,8 @@ TEST_CASE("reparam on the demo asset at half the texels beats the plain resize b
 
 TEST_CASE("reparam on Duck at half the texels: gutters a mip level cleaner win, and the written file beats the resize",
           "[pipeline][reparam][shared][wide-gutter]") {
-  // Issue 17's Duck case. Duck's charts share texels and can only be repacked; at the
+  // Issue 17's Duck case. Duck's charts share texels and can only be repacked (or scaled
+  // as whole units, the unit-scale candidate, which scores alike here); at the
   // mip-safe default (8 texels at 362^2) the repack loses to the resize (q 0.000779 vs
   // 0.000692) although it keeps more texels (scale 0.733 vs 0.707): where its views sample
   // coarse mip levels, the repacked charts bleed into each other, while the input's charts
@@ -362,19 +375,15 @@ TEST_CASE("reparam on Duck at half the texels: gutters a mip level cleaner win, 
   // this checks the choice and the written score, not a visible win.
   if (!test::shared_dir()) UVPRESS_SKIP("../shared is absent");
   auto engine = engine::make_cpu_engine({});
-  const auto path = *test::shared_dir() / "assets" / "Duck" / "glTF" / "Duck.gltf";
-  const io::GltfFile in = io::load_gltf(path.string());
+  const io::GltfFile in = shared_duck();
   io::GltfFile out = in;
   pipeline::ReparamOptions o;
   o.cost = 0.5;
   const auto report = pipeline::reparam(out, *engine, o);
   INFO(report["candidates"].dump());
   REQUIRE(report["guard"].is_object());
-  double q_default = -1, q_wide = -1;
-  for (const auto& c : report["candidates"]) {
-    if (c["name"] == "repack") q_default = c["q"].get<double>();
-    if (c["name"] == "repack+wide-gutter") q_wide = c["q"].get<double>();
-  }
+  const double q_default = candidate_score(report, "repack").first;
+  const double q_wide = candidate_score(report, "repack+wide-gutter").first;
   REQUIRE(q_default > 0);
   REQUIRE(q_wide > 0);
   CHECK(q_wide < q_default);
@@ -398,19 +407,15 @@ TEST_CASE("reparam on Duck: units that share texels trade density as wholes and 
   // raised until the units fill it).
   if (!test::shared_dir()) UVPRESS_SKIP("../shared is absent");
   auto engine = engine::make_cpu_engine({});
-  const auto path = *test::shared_dir() / "assets" / "Duck" / "glTF" / "Duck.gltf";
-  const io::GltfFile in = io::load_gltf(path.string());
+  const io::GltfFile in = shared_duck();
   io::GltfFile out = in;
   pipeline::ReparamOptions o;
   o.cost = 0.25;
   o.guard = false;
   const auto report = pipeline::reparam(out, *engine, o);
   INFO(report["candidates"].dump());
-  double q_repack = -1, q_units = -1, cost_units = -1;
-  for (const auto& c : report["candidates"]) {
-    if (c["name"] == "repack") q_repack = c["q"].get<double>();
-    if (c["name"] == "unit-scale") q_units = c["q"].get<double>(), cost_units = c["cost_ratio"].get<double>();
-  }
+  const double q_repack = candidate_score(report, "repack").first;
+  const auto [q_units, cost_units] = candidate_score(report, "unit-scale");
   REQUIRE(q_repack > 0);
   REQUIRE(q_units > 0);
   eval::EvalOptions eo;
