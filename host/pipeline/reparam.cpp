@@ -271,11 +271,6 @@ void prepare_isometric(const io::Asset& asset, const Layout& L, Prepared& P, con
   }
 }
 
-// A candidate layout: the triangle stage's targets with every stretch factor floored at
-// `floor` (the paper's targets at lambda_min), with or without its rotations, or no
-// reshaping at all (`repack`: the input's charts, only repacked). The most aggressive targets are not
-// always the best at a given cost (the mesh stage's compromise and the re-bake both lose
-// detail), so reparam builds a few and keeps the one that scores best on screen.
 // A triangle's share of the screen: its surface area.
 double surface_area(const io::Primitive& prim, uint32_t t) {
   const uint32_t* ix = &prim.indices[3 * size_t(t)];
@@ -349,6 +344,11 @@ void measure_unit_losses(const io::Asset& asset, const Layout& L, Prepared& P, e
   }
 }
 
+// A candidate layout: the triangle stage's targets with every stretch factor floored at
+// `floor` (the paper's targets at lambda_min), with or without its rotations, or no
+// reshaping at all (`repack`: the input's charts, only repacked; `unit-scale`: each packing
+// unit at a uniform scale of its own). The most aggressive targets are not always the best at a given cost (the mesh stage's compromise and the re-bake both lose
+// detail), so reparam builds a few and keeps the one that scores best on screen.
 struct Candidate {
   std::string name;
   bool reshape = true;
@@ -368,7 +368,7 @@ struct Candidate {
   bool wide_gutter = false;
   // Every chart flattened at one density instead (ReparamOptions::isometric).
   bool isometric = false;
-  // Charts unreshaped, each packing unit at its own uniform scale (Prepared::unit_scale).
+  // Charts unreshaped, each packing unit at its own uniform scale (unit_scales_filling).
   bool unit_scale = false;
 };
 
