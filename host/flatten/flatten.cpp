@@ -13,14 +13,14 @@
 // iteration. The mesh is scaled to area 1, so E = E/|M| = the paper's E_c at convergence.
 #include "flatten/flatten.h"
 
+#include "core/parallel.h"
 #include "core/stopwatch.h"
 #include "flatten/disk_topology.h"
+#include "flatten/problem.h"
 #include "flatten/progressive.h"
 #include "flatten/solver.h"
-#include "core/parallel.h"
-#include "flatten/problem.h"
-#include "solve/triangle_energy.h"
 #include "flatten/tutte.h"
+#include "solve/triangle_energy.h"
 
 #include <algorithm>
 #include <cmath>

@@ -7,8 +7,8 @@
 // reference update; the iteration count N_c is the number of linear solves.
 #pragma once
 
-#include "solve/sparse_system.h"
 #include "flatten/problem.h"
+#include "solve/sparse_system.h"
 
 #include <vector>
 

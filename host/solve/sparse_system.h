@@ -1,4 +1,5 @@
-// The 2V x 2V linear system of one SLIM or CM step, H d = -grad E, u and v coupled
+// The 2V x 2V linear system of one Newton-type step, H d = -grad E (flatten's SLIM and CM
+// steps, the mesh stage's damped Newton step), u and v coupled
 // (dof 2i = u_i, 2i+1 = v_i). The sparsity pattern depends on the connectivity only, so it
 // is built, and CHOLMOD's symbolic analysis (ordering, supernodes) done, once per mesh;
 // every iteration then assembles values into the fixed pattern and refactorizes

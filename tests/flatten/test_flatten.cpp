@@ -3,17 +3,17 @@
 // how non-disk and degenerate input is handled.
 #include <catch2/catch.hpp>
 
+#include "core/parallel.h"
 #include "flatten/composite_majorization.h"
 #include "flatten/disk_topology.h"
 #include "flatten/flatten.h"
+#include "flatten/problem.h"
 #include "flatten/progressive.h"
 #include "flatten/slim.h"
 #include "flatten/solver.h"
-#include "solve/sparse_system.h"
-#include "core/parallel.h"
-#include "flatten/problem.h"
-#include "solve/triangle_energy.h"
 #include "flatten/tutte.h"
+#include "solve/sparse_system.h"
+#include "solve/triangle_energy.h"
 #include "io/mesh_io.h"
 #include "support.h"
 
