@@ -7,7 +7,6 @@
 #include "views.h"
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <string>
 #include <thread>

@@ -475,13 +475,16 @@ UnitScales unit_scales_filling(const Prepared& P, const io::Asset& asset, const 
     return choice.packing.ok && choice.packing.scale >= 1 - 1e-3;
   };
   double lo = P.unit_cost, hi = 1;
-  if (!spare(scales_at(lo))) return {scales_at(lo), lo};  // the packer scales it down whole
-  if (spare(scales_at(hi))) return {scales_at(hi), hi};   // the whole source fits: the repack
+  UnitScales best{scales_at(lo), lo};
+  if (!spare(best.scale)) return best;  // the packer scales it down whole
+  if (std::vector<double> all = scales_at(hi); spare(all)) return {all, hi};  // the whole source fits: the repack
   for (int i = 0; i < 10; ++i) {
     const double mid = std::sqrt(lo * hi);
-    (spare(scales_at(mid)) ? lo : hi) = mid;
+    std::vector<double> k = scales_at(mid);
+    if (spare(k)) lo = mid, best = {std::move(k), mid};
+    else hi = mid;
   }
-  return {scales_at(lo), lo};
+  return best;
 }
 
 // Whether the units' allocation at share c leaves any unit below 0.99 of the largest.
