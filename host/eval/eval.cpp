@@ -141,14 +141,6 @@ Savings pixel_ratio_at_equal_q(const std::vector<std::pair<double, double>>& a,
   return s;
 }
 
-Savings pixel_ratio_at_equal_q(const nlohmann::ordered_json& a, const nlohmann::ordered_json& b, double noise_floor) {
-  auto points = [](const nlohmann::ordered_json& curve) {
-    std::vector<std::pair<double, double>> cq;
-    for (const auto& p : curve) cq.push_back({p["c_r"].get<double>(), p["q"].get<double>()});
-    return cq;
-  };
-  return pixel_ratio_at_equal_q(points(a), points(b), noise_floor);
-}
 
 namespace {
 
@@ -734,9 +726,8 @@ Scored score_as_written(const io::GltfFile& reference, const io::GltfFile& candi
   return AsWrittenScorer(reference, engine, o).score(candidate);
 }
 
-nlohmann::ordered_json evaluate(const io::GltfFile& reference, const std::vector<LayoutInput>& others,
-                                engine::Engine& engine, const EvalOptions& o, EvalArtifacts* artifacts,
-                                const Progress& progress) {
+EvalResult evaluate(const io::GltfFile& reference, const std::vector<LayoutInput>& others, engine::Engine& engine,
+                    const EvalOptions& o, EvalArtifacts* artifacts, const Progress& progress) {
   const Stopwatch t_start;
   Timing timing;
   const Setup s = set_up(reference, engine, o, timing);
@@ -751,8 +742,9 @@ nlohmann::ordered_json evaluate(const io::GltfFile& reference, const std::vector
     bool paper_filter = false;  // input-rebaked: area-filtered to each c_r as in the paper's protocol
     bool scored_as_written = false;
     Scored as_written;
-    uint32_t written_size[2] = {0, 0};
-    nlohmann::ordered_json extra = nlohmann::ordered_json::object();
+    uint32_t written_size[2] = {0, 0};  // the file's own texture (full is re-baked later)
+    std::optional<std::string> rebake;  // how the full texture was re-baked
+    nlohmann::ordered_json isometric;  // the isometric layout's flatten summary
   };
   std::vector<Entry> layouts;
   {
@@ -782,7 +774,7 @@ nlohmann::ordered_json evaluate(const io::GltfFile& reference, const std::vector
     }
     timing.textures += t0.seconds();
     e.mesh.texture_source = "rebaked";
-    e.extra["rebake"] = method;
+    e.rebake = method;
   };
   if (o.paper_baseline) {
     // The paper's protocol (§5.1): the input layout re-baked and area-filtered like every
@@ -825,7 +817,7 @@ nlohmann::ordered_json evaluate(const io::GltfFile& reference, const std::vector
     for (size_t t = 0; t < e.mesh.indices.size() / 3; ++t) e.mesh.uv_area += detail::uv_area(e.mesh.uvs, e.mesh.indices, t);
     e.mesh.repeat = false;
     e.mesh.tangents.clear();  // new UVs: the frame comes from them (normal maps re-baked into it)
-    e.extra["flatten"] = info;
+    e.isometric = std::move(info);
     rebake_into(e);
     layouts.push_back(std::move(e));
   }
@@ -841,45 +833,30 @@ nlohmann::ordered_json evaluate(const io::GltfFile& reference, const std::vector
     artifacts->layouts.clear();
   }
 
-  nlohmann::ordered_json report;
-  const auto dev = engine.device();
-  report["asset"] = reference.path;
-  report["device"] = {{"backend", dev.backend}, {"name", dev.name}, {"type", dev.type}, {"threads", dev.threads}};
-  report["views"] = cameras.size();
-  report["resolution"] = s.resolution.resolution;
-  report["resolution_mode"] = s.resolution.automatic ? "auto" : "fixed";
-  report["resolution_cap"] = o.resolution_cap;
-  report["resolution_capped"] = s.resolution.capped;
-  report["texels_per_pixel"] = {{"percentile", s.resolution.percentile},
-                                {"value", s.resolution.texels_per_pixel},
-                                {"median", s.resolution.texels_per_pixel_median}};
-  report["resolved_fraction"] = s.resolution.resolved_fraction;
-  report["noise_floor"] = o.noise_floor ? nlohmann::ordered_json(s.resolution.noise_floor) : nlohmann::ordered_json(nullptr);
-  report["fov_degrees"] = o.fov_degrees;
-  report["texture_filter"] = to_string(o.filter);
-  report["shading"] = s.lit ? "lit" : "unlit";
-  report["shading_requested"] = to_string(o.shading);
-  if (!s.shading_warning.empty()) report["shading_warning"] = s.shading_warning;
-  if (s.lit && o.noise_floor) report["noise_floor_unlit"] = s.noise_floor_unlit, report["noise_floor_lit"] = s.noise_floor_lit;
-  report["triangles"] = ref.indices.size() / 3;
-  report["reference"] = {{"file", reference.path}, {"image", ref.image},           {"width", ref.full.width},
-                         {"height", ref.full.height}, {"uv_area", ref.uv_area}, {"image_texels", s.image_texels},
-                         {"chart_texels", s.chart_texels}};
-  report["cost_measure"] = "image_texels";
-  if (o.codec)
-    report["codec"] = {{"name", "astc-" + io::block_name(*o.codec)},
-                       {"quality", io::to_string(o.codec->quality)},
-                       {"bits_per_texel", 128.0 / (o.codec->block_x * o.codec->block_y)}};
-  else
-    report["codec"] = nullptr;
-  report["cost_grid"] = o.cost_grid;
-  report["contact_c_r"] = contact;
+  EvalResult r;
+  r.asset = reference.path;
+  r.device = engine.device();
+  r.views = cameras.size();
+  r.resolution = s.resolution;
+  r.resolution_cap = o.resolution_cap;
+  r.noise_floor_measured = o.noise_floor;
+  r.fov_degrees = o.fov_degrees;
+  r.filter = o.filter;
+  r.lit = s.lit;
+  r.shading_requested = o.shading;
+  r.shading_warning = s.shading_warning;
+  if (s.lit && o.noise_floor) r.noise_floor_unlit = s.noise_floor_unlit, r.noise_floor_lit = s.noise_floor_lit;
+  r.triangles = ref.indices.size() / 3;
+  r.reference = {reference.path, ref.image,     ref.full.width,    ref.full.height,
+                 ref.uv_area,    s.image_texels, s.chart_texels};
+  r.codec = o.codec;
+  r.cost_grid = o.cost_grid;
+  r.contact_c_r = contact;
 
   const Resizer area = area_resize(), lanczos_srgb = lanczos_resize(false), lanczos_linear = lanczos_resize(true);
   const Resizer* users = nullptr;  // the input's winning resize, once its curve is done (it comes first)
   struct Curve {
-    nlohmann::ordered_json points = nlohmann::ordered_json::array();
-    std::vector<std::pair<double, double>> cq;  // (c_r, q) by increasing cost
+    std::vector<CurvePoint> points;
     double mean_log_q = 0;
   };
   size_t step = 0;
@@ -894,35 +871,32 @@ nlohmann::ordered_json evaluate(const io::GltfFile& reference, const std::vector
       const Image tex = resize.colour(m.full, W, H);
       timing.textures += t0.seconds();
       Scores sc = score_views(engine, s, m, layout_textures(s, m, tex, &resize, true, timing), timing);
-      const double q = sc.q;
-      const double actual = double(W) * H / s.image_texels;
-      const double chart = double(W) * H * m.uv_area / s.chart_texels;
-      c.points.push_back({{"c_r", c_r}, {"c_r_actual", actual}, {"c_r_chart", chart}, {"r", W}, {"width", W},
-                          {"height", H}, {"q", q}});
-      if (s.lit) c.points.back()["q_unlit"] = sc.q_unlit, c.points.back()["q_lit"] = sc.q_lit;
-      c.points.back()["q_views"] = std::move(sc.views);
-      if (s.codec) c.points.back()["codec_bytes"] = codec_bytes(s, W, H);
-      c.cq.push_back({actual, q});
-      c.mean_log_q += std::log(std::max(q, 1e-9)) / double(o.cost_grid.size());  // q = 0: a perfect copy
+      CurvePoint p;
+      p.c_r = c_r;
+      p.c_r_actual = double(W) * H / s.image_texels;
+      p.c_r_chart = double(W) * H * m.uv_area / s.chart_texels;
+      p.width = W, p.height = H;
+      p.q = sc.q;
+      if (s.lit) p.q_unlit = sc.q_unlit, p.q_lit = sc.q_lit;
+      p.q_views = std::move(sc.views);
+      if (s.codec) p.codec_bytes = codec_bytes(s, W, H);
+      c.mean_log_q += std::log(std::max(p.q, 1e-9)) / double(o.cost_grid.size());  // q = 0: a perfect copy
+      c.points.push_back(std::move(p));
     }
-    std::sort(c.cq.begin(), c.cq.end());
     return c;
   };
 
-  nlohmann::ordered_json out_layouts = nlohmann::ordered_json::array();
-  std::vector<std::vector<std::pair<double, double>>> curves;
   for (auto& e : layouts) {
     const LayoutMesh& m = e.mesh;
-    nlohmann::ordered_json L;
-    L["name"] = m.name;
-    L["file"] = m.file;
-    L["texture"] = m.texture_source;
-    L["full_size"] = {m.full.width, m.full.height};
-    L["uv_area"] = m.uv_area;
-    double spread = 0;
-    Image plot = uv_plot(m, e.aspect, &spread);
-    L["texel_density_spread_log2"] = spread;
-    for (auto& [k, v] : e.extra.items()) L[k] = v;
+    LayoutResult L;
+    L.name = m.name;
+    L.file = m.file;
+    L.texture = m.texture_source;
+    L.full_size[0] = m.full.width, L.full_size[1] = m.full.height;
+    L.uv_area = m.uv_area;
+    Image plot = uv_plot(m, e.aspect, &L.texel_density_spread_log2);
+    L.isometric = std::move(e.isometric);
+    L.rebake = e.rebake;
     Curve curve;
     const Resizer* resize = &area;
     if (e.users_resize) {
@@ -931,10 +905,9 @@ nlohmann::ordered_json evaluate(const io::GltfFile& reference, const std::vector
       // grid, so a layout that beats it beats both.
       Curve srgb = run_curve(m, e.aspect, lanczos_srgb), linear = run_curve(m, e.aspect, lanczos_linear);
       const bool use_linear = linear.mean_log_q < srgb.mean_log_q;
-      const std::string name = use_linear ? "lanczos3-linear" : "lanczos3-srgb";
-      report["input_resize"] = name;
-      L["resize"] = name;
-      L["resize_mean_log_q"] = {{"lanczos3-srgb", srgb.mean_log_q}, {"lanczos3-linear", linear.mean_log_q}};
+      r.input_resize = use_linear ? "lanczos3-linear" : "lanczos3-srgb";
+      L.resize = r.input_resize;
+      L.resize_mean_log_q = std::make_pair(srgb.mean_log_q, linear.mean_log_q);
       curve = use_linear ? std::move(linear) : std::move(srgb);
       resize = users = use_linear ? &lanczos_linear : &lanczos_srgb;
     } else if (users && !e.paper_filter) {
@@ -943,19 +916,20 @@ nlohmann::ordered_json evaluate(const io::GltfFile& reference, const std::vector
       // the filter that shrinks them.
       curve = run_curve(m, e.aspect, *users);
       resize = users;
-      L["resize"] = report["input_resize"];
+      L.resize = r.input_resize;
     } else {
       curve = run_curve(m, e.aspect, area);
-      L["resize"] = "area";
+      L.resize = "area";
     }
     if (e.scored_as_written) {
-      L["as_written"] = {{"c_r", e.as_written.c_r}, {"c_r_chart", e.as_written.c_r_chart}, {"q", e.as_written.q}};
-      if (s.lit) L["as_written"]["q_unlit"] = e.as_written.q_unlit, L["as_written"]["q_lit"] = e.as_written.q_lit;
-      L["as_written"]["width"] = e.written_size[0], L["as_written"]["height"] = e.written_size[1];
-      L["as_written"]["q_views"] = e.as_written.q_views;
+      CurvePoint w;
+      w.c_r = e.as_written.c_r, w.c_r_chart = e.as_written.c_r_chart, w.q = e.as_written.q;
+      w.q_unlit = e.as_written.q_unlit, w.q_lit = e.as_written.q_lit;
+      w.width = e.written_size[0], w.height = e.written_size[1];
+      w.q_views = std::move(e.as_written.q_views);
+      L.as_written = std::move(w);
     }
-    L["curve"] = std::move(curve.points);
-    curves.push_back(std::move(curve.cq));
+    L.curve = std::move(curve.points);
     if (artifacts && o.artifacts) {
       auto [W, H] = size_at(contact, s.image_texels, e.aspect);
       LayoutArtifacts a;
@@ -964,42 +938,23 @@ nlohmann::ordered_json evaluate(const io::GltfFile& reference, const std::vector
       a.uv_plot = plot;
       artifacts->layouts.push_back(std::move(a));
     }
-    out_layouts.push_back(std::move(L));
+    r.layouts.push_back(std::move(L));
   }
-  report["layouts"] = std::move(out_layouts);
 
   // Savings: every layout against the input's, and against the paper's baseline and the
   // isometric layout when present.
-  nlohmann::ordered_json savings = nlohmann::ordered_json::array();
   std::vector<size_t> bases = {0};
   if (o.paper_baseline) bases.push_back(1);
   if (o.flatten) bases.push_back(layouts.size() - 1);
   for (size_t b : bases)
     for (size_t a = 0; a < layouts.size(); ++a) {
       if (a == b || (b != 0 && a == 0)) continue;
-      Savings sv = pixel_ratio_at_equal_q(curves[a], curves[b], s.resolution.noise_floor);
-      nlohmann::ordered_json row = {{"layout", layouts[a].mesh.name}, {"vs", layouts[b].mesh.name}};
-      if (sv.points) {
-        row["pixel_ratio_at_equal_q"] = sv.ratio;
-        row["pixel_savings"] = 1 - sv.ratio;
-        row["q_range"] = {sv.q_lo, sv.q_hi};
-      } else {
-        row["pixel_ratio_at_equal_q"] = nullptr;
-        row["pixel_savings"] = nullptr;
-        row["q_range"] = nullptr;
-      }
-      row["points"] = sv.points;
-      row["ties"] = sv.ties;  // q levels where the two are within the noise floor (counted as ratio 1)
-      savings.push_back(std::move(row));
+      r.savings.push_back({r.layouts[a].name, r.layouts[b].name,
+                           pixel_ratio_at_equal_q(r.layouts[a].cost_q(), r.layouts[b].cost_q(), s.resolution.noise_floor)});
     }
-  report["savings"] = std::move(savings);
-  report["seconds"] = {{"textures", timing.textures},
-                       {"render", timing.render},
-                       {"gmsd", timing.gmsd},
-                       {"shading", timing.shading},
-                       {"total", t_start.seconds()}};
+  r.seconds = {timing.textures, timing.render, timing.gmsd, timing.shading, t_start.seconds()};
   if (progress) progress("done", steps, steps);
-  return report;
+  return r;
 }
 
 }  // namespace uvpress::eval

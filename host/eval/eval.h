@@ -86,6 +86,7 @@
 #include "io/gltf_io.h"
 #include "lit.h"
 #include "resize.h"
+#include "result.h"
 
 #include <nlohmann/json.hpp>
 
@@ -98,9 +99,7 @@
 
 namespace uvpress::eval {
 
-// How the views sample textures (see above).
-enum class TextureFilter { Bilinear, Trilinear };
-const char* to_string(TextureFilter filter);
+// How the views sample textures (see above; TextureFilter is in result.h).
 std::optional<TextureFilter> parse_texture_filter(std::string_view text);
 
 constexpr uint32_t kMaxResolution = 4096;  // views of more than 1024 px are tiled
@@ -142,21 +141,13 @@ struct EvalArtifacts {
 using Progress = std::function<void(const std::string& stage, size_t done, size_t total)>;
 
 // Evaluates the reference's own layout ("input"), "input-rebaked" when
-// options.paper_baseline, each of `others`, and the isometric layout when options.flatten.
-// The report (see README): asset, device, views, resolution (and resolution_mode,
-// resolution_cap, resolution_capped, texels_per_pixel, resolved_fraction, noise_floor),
-// texture_filter, reference {image_texels,
-// chart_texels, ...}, cost_measure ("image_texels"), input_resize ("lanczos3-srgb" |
-// "lanczos3-linear"), cost_grid, layouts [{name, file, texture, resize, uv_area, full_size,
-// as_written {c_r, c_r_chart, q, width, height} (others only), curve [{c_r, c_r_actual,
-// c_r_chart, r, width, height, q, q_views}]}], savings [{layout, vs,
-// pixel_ratio_at_equal_q, pixel_savings, q_range, points}] (image texels), contact_c_r, shading
-// (and q_unlit / q_lit per point when lit: see above),
-// seconds. Throws InputError for assets without a textured triangle primitive or layouts
+// options.paper_baseline, each of `others`, and the isometric layout when options.flatten:
+// their curves, as-written scores and savings (result.h; `to_json` is the report the README
+// describes). Throws InputError for assets without a textured triangle primitive or layouts
 // of another mesh.
-nlohmann::ordered_json evaluate(const io::GltfFile& reference, const std::vector<LayoutInput>& others,
-                                engine::Engine& engine, const EvalOptions& options = {},
-                                EvalArtifacts* artifacts = nullptr, const Progress& progress = {});
+EvalResult evaluate(const io::GltfFile& reference, const std::vector<LayoutInput>& others, engine::Engine& engine,
+                    const EvalOptions& options = {}, EvalArtifacts* artifacts = nullptr,
+                    const Progress& progress = {});
 
 // A candidate asset as written, scored against the reference: the 20 views of the
 // candidate rendered with its own driving texture at its real size and its own sampler,
@@ -165,17 +156,6 @@ nlohmann::ordered_json evaluate(const io::GltfFile& reference, const std::vector
 // charts, relative). The candidate need not share the reference's triangles, only its
 // surface (the cameras frame the reference). reparam's "never worse" guard compares its
 // result with a resized input this way. Throws InputError as evaluate does.
-// The view resolution an evaluation chose and what it resolves (see above).
-struct ViewResolution {
-  uint32_t resolution = 512;  // pixels a side
-  bool automatic = false, capped = false;
-  double percentile = 0.95;
-  double texels_per_pixel = 0;         // at the percentile, at `resolution`
-  double texels_per_pixel_median = 0;  // at `resolution`
-  double resolved_fraction = 0;        // visible screen area with <= 1 texel per pixel
-  double noise_floor = 0;              // quarter-pixel jitter q (0 when not measured)
-};
-
 struct Scored {
   double c_r = 0, q = 0;  // q: the lit q when `lit`, else the unlit q
   double c_r_chart = 0;
@@ -207,7 +187,7 @@ class AsWrittenScorer {
 // says when gnuplot is not installed), DIR/contact-*.png
 // and DIR/uv-*.png. All files appear at once (temporaries renamed at the end). Throws
 // InputError(dir, reason).
-void write_html_report(const nlohmann::ordered_json& report, const EvalArtifacts& artifacts, const std::string& dir);
+void write_html_report(const EvalResult& result, const EvalArtifacts& artifacts, const std::string& dir);
 
 // --- Parts, exposed for tests ---
 
@@ -228,17 +208,6 @@ std::array<float, 16> tile_camera(const std::array<float, 16>& camera, uint32_t 
 // a ratio of 1 (`ties`): on a curve flatter than the noise, equal-q costs are the noise's
 // (Duck's curve moves 1.8e-4 from c_r 0.6 to 0.9 against a floor of 1.4e-4, and a tie read
 // as "0.60x the pixels").
-struct Savings {
-  double ratio = 0;
-  size_t points = 0;
-  size_t ties = 0;  // levels within the noise floor, counted as ratio 1
-  double q_lo = 0, q_hi = 0;
-};
 Savings pixel_ratio_at_equal_q(const std::vector<std::pair<double, double>>& a,
                                const std::vector<std::pair<double, double>>& b, double noise_floor = 0);
-// The same for two curves as reports hold them: arrays of {c_r, q} by increasing c_r (an
-// eval layout's `curve`, reparam's `curve`).
-Savings pixel_ratio_at_equal_q(const nlohmann::ordered_json& a, const nlohmann::ordered_json& b,
-                               double noise_floor = 0);
-
 }  // namespace uvpress::eval

@@ -53,7 +53,7 @@ std::string find_gnuplot() {
 
 // log q_r against c_r for every layout, by gnuplot's svg terminal. "" when gnuplot is
 // missing or fails.
-std::string plot_svg(const nlohmann::ordered_json& report, std::string* why) {
+std::string plot_svg(const EvalResult& report, std::string* why) {
   const std::string gnuplot = find_gnuplot();
   if (gnuplot.empty()) {
     *why = "gnuplot is not installed (apt-get install gnuplot-nox)";
@@ -68,30 +68,28 @@ std::string plot_svg(const nlohmann::ordered_json& report, std::string* why) {
   std::ostringstream script;
   script << "set terminal svg size 760,480 dynamic enhanced font 'sans,12' background rgb 'white'\n"
          << "set output '" << (tmp / "plot.svg").string() << "'\n"
-         << "set title 'Perceptual loss against relative pixel cost (" << report["views"].get<int>() << " views, "
-         << report["resolution"].get<int>() << "^2 px)'\n"
+         << "set title 'Perceptual loss against relative pixel cost (" << report.views << " views, "
+         << report.resolution.resolution << "^2 px)'\n"
          << "set xlabel 'relative cost c_r'\nset ylabel 'q_r (mean GMSD, log scale)'\n"
          << "set logscale y\nset grid\nset key top right\nset format y '10^{%L}'\n";
   std::string plot = "plot ";
   size_t k = 0;
-  for (const auto& L : report["layouts"]) {
+  for (const auto& L : report.layouts) {
     const std::string data = (tmp / ("l" + std::to_string(k) + ".dat")).string();
     std::ofstream f(data);
-    for (const auto& p : L["curve"]) {
-      const double q = p["q"].get<double>();
-      if (q > 0) f << p["c_r_actual"].get<double>() << " " << q << "\n";
-    }
-    std::string name = L["name"].get<std::string>();
+    for (const auto& p : L.curve)
+      if (p.q > 0) f << p.c_r_actual << " " << p.q << "\n";
+    std::string name = L.name;
     for (char& c : name)
       if (c == '\'' || c == '_') c = ' ';
     const std::string lt = " lt " + std::to_string(k + 1);
     plot += (k ? ", " : "") + std::string("'") + data + "' using 1:2 with linespoints" + lt + " lw 2 pt 7 title '" + name + "'";
     // The file as written (its own texture at its real size): one large square in the
     // layout's colour, so a reader sees where the asset a user gets sits on its own curve.
-    if (L.contains("as_written") && L["as_written"]["q"].get<double>() > 0) {
+    if (L.as_written && L.as_written->q > 0) {
       const std::string point = (tmp / ("w" + std::to_string(k) + ".dat")).string();
       std::ofstream w(point);
-      w << L["as_written"]["c_r"].get<double>() << " " << L["as_written"]["q"].get<double>() << "\n";
+      w << L.as_written->c_r << " " << L.as_written->q << "\n";
       plot += ", '" + point + "' using 1:2 with points" + lt + " pt 5 ps 2 title '" + name + " as written'";
     }
     ++k;
@@ -125,7 +123,7 @@ std::vector<uint8_t> png(const Image& img) {
 
 }  // namespace
 
-void write_html_report(const nlohmann::ordered_json& report, const EvalArtifacts& art, const std::string& dir) {
+void write_html_report(const EvalResult& report, const EvalArtifacts& art, const std::string& dir) {
   std::error_code ec;
   fs::create_directories(dir, ec);
   if (ec || !fs::is_directory(dir)) throw InputError(dir, "cannot create the report folder");
@@ -136,40 +134,41 @@ void write_html_report(const nlohmann::ordered_json& report, const EvalArtifacts
 
   std::ostringstream h;
   h << "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">\n<title>uvpress eval: "
-    << escape(fs::path(report["asset"].get<std::string>()).filename().string()) << "</title>\n"
+    << escape(fs::path(report.asset).filename().string()) << "</title>\n"
     << "<style>body{font-family:sans-serif;margin:2em;max-width:1400px;color:#222}"
        "table{border-collapse:collapse;margin:1em 0}td,th{border:1px solid #ccc;padding:4px 8px;text-align:right}"
        "th{background:#f3f3f3}td.l,th.l{text-align:left}.headline{font-size:1.3em;background:#eef6ee;padding:.6em 1em;"
        "border-left:5px solid #3a3}figure{display:inline-block;margin:.5em;vertical-align:top}"
        "figcaption{font-size:.9em;color:#555}img{max-width:100%;border:1px solid #ddd}</style>\n</head><body>\n";
-  h << "<h1>uvpress eval</h1>\n<p>Asset <code>" << escape(report["asset"].get<std::string>()) << "</code>, "
-    << report["triangles"].get<size_t>() << " textured triangles; " << report["views"].get<int>()
-    << " views from the vertices of a regular dodecahedron, " << report["resolution"].get<int>() << "&times;"
-    << report["resolution"].get<int>() << " pixels, " << escape(report["texture_filter"].get<std::string>())
-    << "; device " << escape(report["device"]["backend"].get<std::string>()) << " ("
-    << escape(report["device"]["name"].get<std::string>()) << "). Quality q = mean GMSD against the input layout with its "
+  h << "<h1>uvpress eval</h1>\n<p>Asset <code>" << escape(report.asset) << "</code>, "
+    << report.triangles << " textured triangles; " << report.views
+    << " views from the vertices of a regular dodecahedron, " << report.resolution.resolution << "&times;"
+    << report.resolution.resolution << " pixels, " << escape(to_string(report.filter))
+    << "; device " << escape(report.device.backend) << " ("
+    << escape(report.device.name) << "). Quality q = mean GMSD against the input layout with its "
     << "full texture (lower is better); cost c<sub>r</sub> = image texels (W&times;H, what a user pays for) relative to the "
     << "input's image; the paper's c<sub>r</sub> (texels under the charts, eq. 20&ndash;21) is in each cell's tooltip. "
-    << "The input layout's texture is resized as users' tools do (" << escape(report.value("input_resize", std::string("?")))
+    << "The input layout's texture is resized as users' tools do (" << escape(report.input_resize.empty() ? std::string("?") : report.input_resize)
     << ", the stronger of Lanczos-3 in sRGB values and in linear light); other layouts are re-baked and area-filtered. "
     << "&ldquo;As written&rdquo;: a file's own texture at its real size. Shading: "
-    << (report.value("shading", std::string("unlit")) == "lit"
+    << (report.lit
             ? std::string("lit (q from views lit by a fixed rig through the normal, occlusion, metallic-roughness and "
                           "emissive maps; each point's unlit q in its tooltip)")
             : std::string("unlit (q from the base colour's luminance)"))
-    << (report.contains("shading_warning") ? " &mdash; " + escape(report["shading_warning"].get<std::string>()) : "")
+    << (!report.shading_warning.empty() ? " &mdash; " + escape(report.shading_warning) : "")
     << "; the contact sheets show the base colour.</p>\n";
 
   h << "<h2>Pixel savings at equal quality</h2>\n";
   bool any = false;
-  for (const auto& s : report["savings"]) {
-    if (s["pixel_ratio_at_equal_q"].is_null()) continue;
-    const double r = s["pixel_ratio_at_equal_q"].get<double>();
-    h << "<p class=\"headline\"><b>" << escape(s["layout"].get<std::string>()) << "</b> reaches the quality of <b>"
-      << escape(s["vs"].get<std::string>()) << "</b> with <b>" << fmt(100 * r, "%.1f") << "%</b> of its pixels ("
+  for (const auto& row : report.savings) {
+    const Savings& s = row.savings;
+    if (!s.points) continue;
+    const double r = s.ratio;
+    h << "<p class=\"headline\"><b>" << escape(row.layout) << "</b> reaches the quality of <b>"
+      << escape(row.vs) << "</b> with <b>" << fmt(100 * r, "%.1f") << "%</b> of its pixels ("
       << (r <= 1 ? fmt(100 * (1 - r), "%.1f") + "% fewer" : fmt(100 * (r - 1), "%.1f") + "% more")
-      << "), over q &isin; [" << fmt(s["q_range"][0].get<double>()) << ", " << fmt(s["q_range"][1].get<double>())
-      << "], " << s["points"].get<size_t>() << " levels.</p>\n";
+      << "), over q &isin; [" << fmt(s.q_lo) << ", " << fmt(s.q_hi)
+      << "], " << s.points << " levels.</p>\n";
     any = true;
   }
   if (!any) h << "<p>No pair of layouts reaches a common q on this grid (or only one layout).</p>\n";
@@ -179,20 +178,17 @@ void write_html_report(const nlohmann::ordered_json& report, const EvalArtifacts
   else h << "<p><i>Plot unavailable: " << escape(why) << ".</i></p>\n";
 
   h << "<table><tr><th class=\"l\">layout</th><th class=\"l\">texture</th>";
-  for (const auto& c : report["cost_grid"]) h << "<th>c<sub>r</sub>=" << fmt(c.get<double>(), "%.2f") << "</th>";
+  for (double c : report.cost_grid) h << "<th>c<sub>r</sub>=" << fmt(c, "%.2f") << "</th>";
   h << "<th>as written</th></tr>\n";
-  for (const auto& L : report["layouts"]) {
-    h << "<tr><td class=\"l\">" << escape(L["name"].get<std::string>()) << "</td><td class=\"l\">"
-      << escape(L["texture"].get<std::string>()) << " " << L["full_size"][0].get<int>() << "&times;"
-      << L["full_size"][1].get<int>() << "</td>";
-    for (const auto& p : L["curve"])
-      h << "<td title=\"" << p["width"].get<int>() << "x" << p["height"].get<int>() << ", c_r "
-        << fmt(p["c_r_actual"].get<double>()) << ", chart c_r " << fmt(p.value("c_r_chart", 0.0))
-        << (p.contains("q_unlit") ? ", unlit q " + fmt(p["q_unlit"].get<double>()) : std::string()) << "\">"
-        << fmt(p["q"].get<double>()) << "</td>";
-    if (L.contains("as_written"))
-      h << "<td>q " << fmt(L["as_written"]["q"].get<double>()) << " at c<sub>r</sub> "
-        << fmt(L["as_written"]["c_r"].get<double>(), "%.3f") << "</td>";
+  for (const auto& L : report.layouts) {
+    h << "<tr><td class=\"l\">" << escape(L.name) << "</td><td class=\"l\">" << escape(L.texture) << " "
+      << L.full_size[0] << "&times;" << L.full_size[1] << "</td>";
+    for (const auto& p : L.curve)
+      h << "<td title=\"" << p.width << "x" << p.height << ", c_r " << fmt(p.c_r_actual) << ", chart c_r "
+        << fmt(p.c_r_chart) << (report.lit ? ", unlit q " + fmt(p.q_unlit) : std::string()) << "\">" << fmt(p.q)
+        << "</td>";
+    if (L.as_written)
+      h << "<td>q " << fmt(L.as_written->q) << " at c<sub>r</sub> " << fmt(L.as_written->c_r, "%.3f") << "</td>";
     else
       h << "<td></td>";
     h << "</tr>\n";
@@ -201,8 +197,7 @@ void write_html_report(const nlohmann::ordered_json& report, const EvalArtifacts
 
   std::vector<std::pair<std::string, std::vector<uint8_t>>> images;
   if (!art.layouts.empty() || !art.reference_contact.pixels.empty()) {
-    h << "<h2>The " << report["views"].get<int>() << " views at c<sub>r</sub> = "
-      << fmt(report["contact_c_r"].get<double>()) << "</h2>\n";
+    h << "<h2>The " << report.views << " views at c<sub>r</sub> = " << fmt(report.contact_c_r) << "</h2>\n";
     if (!art.reference_contact.pixels.empty()) {
       images.push_back({"contact-reference.png", png(art.reference_contact)});
       h << "<figure><img src=\"contact-reference.png\" alt=\"reference views\"><figcaption>reference: input layout, "
@@ -220,17 +215,15 @@ void write_html_report(const nlohmann::ordered_json& report, const EvalArtifacts
     for (const auto& a : art.layouts) {
       const std::string f = "uv-" + slug(a.name) + ".png";
       images.push_back({f, png(a.uv_plot)});
-      double spread = 0;
-      for (const auto& L : report["layouts"])
-        if (L["name"] == a.name) spread = L["texel_density_spread_log2"].get<double>();
+      const LayoutResult* L = report.layout(a.name);
+      const double spread = L ? L->texel_density_spread_log2 : 0.0;
       h << "<figure><img src=\"" << f << "\" alt=\"" << escape(a.name) << " UV layout\" style=\"max-width:420px\">"
         << "<figcaption>" << escape(a.name) << ": spread " << fmt(spread, "%.3f") << "</figcaption></figure>\n";
     }
   }
-  h << "<p style=\"color:#777\">seconds: textures " << fmt(report["seconds"]["textures"].get<double>(), "%.2f")
-    << ", render " << fmt(report["seconds"]["render"].get<double>(), "%.2f") << ", GMSD "
-    << fmt(report["seconds"]["gmsd"].get<double>(), "%.2f") << ", total "
-    << fmt(report["seconds"]["total"].get<double>(), "%.2f") << ".</p>\n</body></html>\n";
+  h << "<p style=\"color:#777\">seconds: textures " << fmt(report.seconds.textures, "%.2f") << ", render "
+    << fmt(report.seconds.render, "%.2f") << ", GMSD " << fmt(report.seconds.gmsd, "%.2f") << ", total "
+    << fmt(report.seconds.total, "%.2f") << ".</p>\n</body></html>\n";
   for (const auto& [name, bytes] : images) writer.add((fs::path(dir) / name).string(), bytes);
   writer.add((fs::path(dir) / "index.html").string(), h.str());
   writer.commit();

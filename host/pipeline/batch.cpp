@@ -282,7 +282,7 @@ json process_asset(const BatchItem& item, const BatchOptions& o, engine::Engine*
     report["input_validation"] = io::validation_json(issues);
     if (!issues.empty() && o.strict) throw InputError(item.input, io::describe_issues(issues) + ": refused (--strict)");
     report["input_bytes"] = io::asset_bytes(item.input, o.refs).total();  // JSON, buffers and images
-    auto r = reparam(file, *engine, o.reparam);
+    auto r = reparam(file, *engine, o.reparam).to_json();
     if (!issues.empty()) r["warnings"].push_back("the input has " + io::describe_issues(issues));
     if (o.astc) r["gpu_textures"] = io::gpu_textures_report(io::attach_astc_textures(file, *o.astc), *o.astc);
     // Files of an earlier run's output that this one no longer names (a KTX2 copy, when
@@ -308,7 +308,7 @@ json process_asset(const BatchItem& item, const BatchOptions& o, engine::Engine*
       io::GltfFile result = io::load_gltf(out.string());
       eval::EvalOptions eo = o.eval_options;
       eo.artifacts = false;
-      json e = eval::evaluate(reference, {{"reparam", &result}}, *engine, eo);
+      json e = eval::evaluate(reference, {{"reparam", &result}}, *engine, eo).to_json();
       write_json(eval_path(item, o), e);
       report["eval"] = eval_path(item, o).string();
       for (const auto& s : e["savings"])

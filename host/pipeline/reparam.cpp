@@ -921,220 +921,239 @@ void resize_images(io::GltfFile& file, const std::vector<std::pair<int, std::arr
   }
 }
 
-}  // namespace
-
-json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o, const Progress& progress,
-             io::GltfFile* layout_out) {
-  const Stopwatch t_start;
-  const io::GltfFile original = file;
-  json report;
-  json stages = json::object();
+// One run of reparam: the input, the layouts found and prepared, and what the stages
+// below decide. The stages run in the order reparam() calls them (DESIGN's diagram).
+struct Run {
+  Run(io::GltfFile& f, engine::Engine& e, const ReparamOptions& opt, const Progress& p)
+      : file(f), original(f), engine(e), o(opt), progress(p), asset(io::build_asset(f)), layouts(find_layouts(asset)) {}
+  io::GltfFile& file;           // becomes the output
+  const io::GltfFile original;  // the input, as loaded
+  engine::Engine& engine;
+  const ReparamOptions& o;
+  const Progress& progress;
+  io::Asset asset;
+  std::vector<Layout> layouts;
+  json layout_base = json::array();  // per layout: images, driver, UV sets (untouched ones as found)
+  std::vector<Prepared> prepared;    // the layouts reparam changes
   json warnings = json::array();
-  io::Asset asset = io::build_asset(file);
-  std::vector<Layout> layouts = find_layouts(asset);
-  auto device = engine.device();
-  report["device"] = device.name;
-  report["backend"] = device.backend;
+  size_t optimized = 0, infeasible = 0;  // triangles through the triangle stage, those kept at the identity
+  double t_triangle = 0, t_score = 0;
+  std::unique_ptr<eval::AsWrittenScorer> scorer;  // candidates and the guard: 20 views as written
+  std::string score_failure;                      // why eval cannot score the asset
+  Realized chosen;                                // the kept candidate, built into `file`
+  Candidate chosen_plan;
+  std::string chosen_by;  // "reparam", "resize" or "untouched"
+  ReparamResult result;
+};
 
-  size_t optimized = 0, infeasible = 0;
-  double t_triangle = 0;
-  json layout_base = json::array();
-  std::vector<Prepared> prepared;
-
-  for (size_t li = 0; li < layouts.size(); ++li) {
-    Layout& L = layouts[li];
-    json jl = {{"images", L.images}, {"driver", L.driver}};
-    json sets = json::array();
-    for (auto& s : L.uv_sets) sets.push_back({{"mesh", asset.primitives[size_t(s.primitive)].mesh},
-                                              {"primitive", asset.primitives[size_t(s.primitive)].primitive},
-                                              {"tex_coord", s.tex_coord}});
-    jl["uv_sets"] = sets;
-    if (!L.untouched.empty()) {
-      jl["untouched"] = L.untouched;
-      warnings.push_back("layout " + std::to_string(li) + " left untouched: " + L.untouched);
-      layout_base.push_back(jl);
-      continue;
-    }
+// Layout li: its charts, which of them may be reshaped, and the triangle stage's targets
+// (with rate control, the equal-slope allocation and the packing units' losses).
+void prepare_layout(Run& run, size_t li) {
+  const ReparamOptions& o = run.o;
+  const io::Asset& asset = run.asset;
+  const io::GltfFile& file = run.file;
+  engine::Engine& engine = run.engine;
+  const Progress& progress = run.progress;
+  json& warnings = run.warnings;
+  std::vector<Prepared>& prepared = run.prepared;
+  double& t_triangle = run.t_triangle;
+  auto& layouts = run.layouts;
+  auto& layout_base = run.layout_base;
+  Layout& L = layouts[li];
+  json jl = {{"images", L.images}, {"driver", L.driver}};
+  json sets = json::array();
+  for (auto& s : L.uv_sets) sets.push_back({{"mesh", asset.primitives[size_t(s.primitive)].mesh},
+                                            {"primitive", asset.primitives[size_t(s.primitive)].primitive},
+                                            {"tex_coord", s.tex_coord}});
+  jl["uv_sets"] = sets;
+  if (!L.untouched.empty()) {
+    jl["untouched"] = L.untouched;
+    warnings.push_back("layout " + std::to_string(li) + " left untouched: " + L.untouched);
     layout_base.push_back(jl);
-    prepared.emplace_back();
-    Prepared& P = prepared.back();
-    P.index = li;
-    const std::string driver_name = file.path + ": image " + std::to_string(L.driver);
-    P.driver = io::decode_image(file.image_bytes[size_t(L.driver)], driver_name);
-    const Image& driver = P.driver;
-    const double W = driver.width, H = driver.height;
-    P.W = W, P.H = H;
-    // The uniform scale a plain resize to the requested cost applies (rate control's yardstick).
-    double rate_scale = 0;
-    if (o.optimize && !o.isometric && o.rate_control && o.max_gmsd <= 0) {
-      const double c = o.size > 0 ? double(o.size) * o.size * std::min(W, H) / std::max(W, H) / (W * H) : o.cost;
-      rate_scale = std::sqrt(std::min(1.0, c));
-    }
-    std::vector<float> luminance = luminance_plane(driver);
+    return;
+  }
+  layout_base.push_back(jl);
+  prepared.emplace_back();
+  Prepared& P = prepared.back();
+  P.index = li;
+  const std::string driver_name = file.path + ": image " + std::to_string(L.driver);
+  P.driver = io::decode_image(file.image_bytes[size_t(L.driver)], driver_name);
+  const Image& driver = P.driver;
+  const double W = driver.width, H = driver.height;
+  P.W = W, P.H = H;
+  // The uniform scale a plain resize to the requested cost applies (rate control's yardstick).
+  double rate_scale = 0;
+  if (o.optimize && !o.isometric && o.rate_control && o.max_gmsd <= 0) {
+    const double c = o.size > 0 ? double(o.size) * o.size * std::min(W, H) / std::max(W, H) / (W * H) : o.cost;
+    rate_scale = std::sqrt(std::min(1.0, c));
+  }
+  std::vector<float> luminance = luminance_plane(driver);
 
-    // Charts of every UV set, with the triangle stage's targets.
-    std::vector<Chart>& charts = P.charts;
-    auto& welded_of_vertex = P.welded_of_vertex;
-    auto& welded_count = P.welded_count;
-    auto& tri = P.tri;
-    welded_of_vertex.resize(L.uv_sets.size()), welded_count.resize(L.uv_sets.size()), P.results.resize(L.uv_sets.size());
-    for (size_t si = 0; si < L.uv_sets.size(); ++si) {
-      const io::Primitive& prim = asset.primitives[size_t(L.uv_sets[si].primitive)];
-      const std::vector<float>& uv = prim.uv_sets[size_t(L.uv_sets[si].tex_coord)].uv;
-      Mesh welded = atlas::weld_uv_mesh(prim.positions.data(), uv.data(), prim.vertex_count(), prim.indices.data(),
-                                        prim.indices.size());
-      welded_count[si] = welded.uv_count();
-      welded_of_vertex[si].assign(prim.vertex_count(), UINT32_MAX);
-      for (size_t c = 0; c < prim.indices.size(); ++c) welded_of_vertex[si][prim.indices[c]] = welded.uv_triangles[c];
-      atlas::Charts found = atlas::find_charts(welded);
+  // Charts of every UV set, with the triangle stage's targets.
+  std::vector<Chart>& charts = P.charts;
+  auto& welded_of_vertex = P.welded_of_vertex;
+  auto& welded_count = P.welded_count;
+  auto& tri = P.tri;
+  welded_of_vertex.resize(L.uv_sets.size()), welded_count.resize(L.uv_sets.size()), P.results.resize(L.uv_sets.size());
+  for (size_t si = 0; si < L.uv_sets.size(); ++si) {
+    const io::Primitive& prim = asset.primitives[size_t(L.uv_sets[si].primitive)];
+    const std::vector<float>& uv = prim.uv_sets[size_t(L.uv_sets[si].tex_coord)].uv;
+    Mesh welded = atlas::weld_uv_mesh(prim.positions.data(), uv.data(), prim.vertex_count(), prim.indices.data(),
+                                      prim.indices.size());
+    welded_count[si] = welded.uv_count();
+    welded_of_vertex[si].assign(prim.vertex_count(), UINT32_MAX);
+    for (size_t c = 0; c < prim.indices.size(); ++c) welded_of_vertex[si][prim.indices[c]] = welded.uv_triangles[c];
+    atlas::Charts found = atlas::find_charts(welded);
 
-      const size_t first_chart = charts.size();
-      charts.resize(first_chart + found.count);
-      for (size_t t = 0; t < prim.triangle_count(); ++t) charts[first_chart + found.chart_of_triangle[t]].triangles.push_back(uint32_t(t));
-      for (size_t c = first_chart; c < charts.size(); ++c) {
-        Chart& ch = charts[c];
-        ch.uv_set = si;
-        std::map<uint32_t, uint32_t> local_of;
-        for (uint32_t t : ch.triangles)
-          for (int k = 0; k < 3; ++k) {
-            uint32_t w = welded.uv_triangles[3 * t + uint32_t(k)];
-            auto [it, fresh] = local_of.emplace(w, uint32_t(ch.vertices.size()));
-            if (fresh) {
-              ch.vertices.push_back(w);
-              ch.uv.push_back(welded.uvs[2 * w] * W);
-              ch.uv.push_back(welded.uvs[2 * w + 1] * H);
-            }
-            ch.local.push_back(it->second);
+    const size_t first_chart = charts.size();
+    charts.resize(first_chart + found.count);
+    for (size_t t = 0; t < prim.triangle_count(); ++t) charts[first_chart + found.chart_of_triangle[t]].triangles.push_back(uint32_t(t));
+    for (size_t c = first_chart; c < charts.size(); ++c) {
+      Chart& ch = charts[c];
+      ch.uv_set = si;
+      std::map<uint32_t, uint32_t> local_of;
+      for (uint32_t t : ch.triangles)
+        for (int k = 0; k < 3; ++k) {
+          uint32_t w = welded.uv_triangles[3 * t + uint32_t(k)];
+          auto [it, fresh] = local_of.emplace(w, uint32_t(ch.vertices.size()));
+          if (fresh) {
+            ch.vertices.push_back(w);
+            ch.uv.push_back(welded.uvs[2 * w] * W);
+            ch.uv.push_back(welded.uvs[2 * w + 1] * H);
           }
-        // Orientation: all triangles one way (a mirrored chart is flipped consistently);
-        // mixed orientations mean folds or overlaps in UV, kept rigid.
-        size_t positive = 0, negative = 0;
-        for (size_t t = 0; t < ch.triangles.size(); ++t) {
-          double a = signed_area(&ch.uv[2 * ch.local[3 * t]], &ch.uv[2 * ch.local[3 * t + 1]], &ch.uv[2 * ch.local[3 * t + 2]]);
-          P.old_used += std::abs(a);
-          positive += a > 0, negative += a < 0;
+          ch.local.push_back(it->second);
         }
-        if (negative > positive)
-          for (size_t t = 0; t < ch.triangles.size(); ++t) std::swap(ch.local[3 * t + 1], ch.local[3 * t + 2]);
-        ch.rigid = positive > 0 && negative > 0;
-        P.rigid += ch.rigid;
+      // Orientation: all triangles one way (a mirrored chart is flipped consistently);
+      // mixed orientations mean folds or overlaps in UV, kept rigid.
+      size_t positive = 0, negative = 0;
+      for (size_t t = 0; t < ch.triangles.size(); ++t) {
+        double a = signed_area(&ch.uv[2 * ch.local[3 * t]], &ch.uv[2 * ch.local[3 * t + 1]], &ch.uv[2 * ch.local[3 * t + 2]]);
+        P.old_used += std::abs(a);
+        positive += a > 0, negative += a < 0;
       }
+      if (negative > positive)
+        for (size_t t = 0; t < ch.triangles.size(); ++t) std::swap(ch.local[3 * t + 1], ch.local[3 * t + 2]);
+      ch.rigid = positive > 0 && negative > 0;
+      P.rigid += ch.rigid;
     }
-    find_shared_texels(P);
-    if (o.isometric) {
-      const std::string stage = "flatten (layout " + std::to_string(li) + ")";
-      if (progress) progress(stage, 0, 1);
-      prepare_isometric(asset, L, P, o.flatten);
-      if (progress) progress(stage, 1, 1);
-      for (const std::string& k : P.isometric.kept) warnings.push_back("layout " + std::to_string(li) + " " + k + " (input shape kept)");
-    }
+  }
+  find_shared_texels(P);
+  if (o.isometric) {
+    const std::string stage = "flatten (layout " + std::to_string(li) + ")";
+    if (progress) progress(stage, 0, 1);
+    prepare_isometric(asset, L, P, o.flatten);
+    if (progress) progress(stage, 1, 1);
+    for (const std::string& k : P.isometric.kept) warnings.push_back("layout " + std::to_string(li) + " " + k + " (input shape kept)");
+  }
 
-    // Triangle stage, for the triangles of charts that may be reshaped (rigid charts and
-    // charts sharing texels keep their shape: optimizing them would be wasted work).
+  // Triangle stage, for the triangles of charts that may be reshaped (rigid charts and
+  // charts sharing texels keep their shape: optimizing them would be wasted work).
+  for (size_t si = 0; si < L.uv_sets.size(); ++si) {
+    const io::Primitive& prim = asset.primitives[size_t(L.uv_sets[si].primitive)];
+    const std::vector<float>& uv = prim.uv_sets[size_t(L.uv_sets[si].tex_coord)].uv;
+    std::vector<uint32_t> which;
+    for (const Chart& ch : charts)
+      if (ch.uv_set == si && !ch.rigid && !ch.shared) which.insert(which.end(), ch.triangles.begin(), ch.triangles.end());
+    std::sort(which.begin(), which.end());
+    // Kept per triangle (the candidates derive their targets from it).
+    if (o.optimize && !o.isometric && !which.empty()) {
+      Stopwatch t0;
+      perceptual::TriangleViewInput in{prim.positions.data(), prim.vertex_count(), prim.indices.data(),
+                                       prim.triangle_count(), uv.data(), driver.width, driver.height};
+      perceptual::TriangleStageOptions topt = o.triangle;
+      if (rate_scale > 0) {
+        // Rate control: each triangle may lose at most a little more than the plain resize
+        // to the requested cost would make it lose (its loss at J = sqrt(c) I, measured on
+        // its own views), so the optimizer only ever trades texels where the resize would
+        // have spent them for nothing.
+        const double s0 = rate_scale;
+        std::vector<double> g = perceptual::measure_triangles(engine, in, luminance, topt, {s0, 0, 0, s0}, which);
+        topt.epsilons.assign(prim.triangle_count(), o.triangle.epsilon);
+        for (size_t k = 0; k < which.size(); ++k) {
+          topt.epsilons[which[k]] = std::max(o.rate_margin * g[k], o.rate_floor);
+          tri.rate_epsilons.push_back(topt.epsilons[which[k]]);
+        }
+        topt.start_scale = s0;
+      }
+      if (progress) {
+        const std::string stage = "triangles (layout " + std::to_string(li) + ")";
+        topt.progress = [&progress, stage](size_t done, size_t total) { progress(stage, done, total); };
+      }
+      auto results = perceptual::optimize_triangles(engine, in, luminance, topt, which);
+      P.results[si].assign(prim.triangle_count(), perceptual::TriangleResult{});  // evaluations 0: not optimized
+      for (size_t k = 0; k < results.size(); ++k) {
+        const auto& r = results[k];
+        tri.optimized += 1;
+        tri.feasible += r.feasible;
+        if (!r.feasible) tri.infeasible_identity_gmsd.push_back(r.identity_gmsd);
+        tri.resolved += r.texels_per_pixel <= 1.0 + 1e-6;
+        tri.sampled += !r.complete;
+        tri.coarsened += r.identity_lattice > 1;
+        tri.lambda_area.push_back(r.lambda1 * r.lambda2);
+      }
+      for (size_t k = 0; k < results.size(); ++k) P.results[si][which[k]] = std::move(results[k]);
+      t_triangle += t0.seconds();
+    }
+  }
+
+  // The equal-slope allocation over the layout's optimized triangles (a candidate's
+  // targets): each triangle's loss at a few uniform shrinks, measured on its own views.
+  if (o.optimize && o.candidates && rate_scale > 0 && P.tri.optimized > 0) {
+    Stopwatch t0;
+    perceptual::LossCurves curves;
+    curves.scales = kSlopeScales;
+    std::vector<std::pair<size_t, uint32_t>> where;  // (UV set, triangle) per allocated triangle
+    std::vector<double> area, weight;
     for (size_t si = 0; si < L.uv_sets.size(); ++si) {
+      if (P.results[si].empty()) continue;
       const io::Primitive& prim = asset.primitives[size_t(L.uv_sets[si].primitive)];
       const std::vector<float>& uv = prim.uv_sets[size_t(L.uv_sets[si].tex_coord)].uv;
       std::vector<uint32_t> which;
-      for (const Chart& ch : charts)
-        if (ch.uv_set == si && !ch.rigid && !ch.shared) which.insert(which.end(), ch.triangles.begin(), ch.triangles.end());
-      std::sort(which.begin(), which.end());
-      // Kept per triangle (the candidates derive their targets from it).
-      if (o.optimize && !o.isometric && !which.empty()) {
-        Stopwatch t0;
-        perceptual::TriangleViewInput in{prim.positions.data(), prim.vertex_count(), prim.indices.data(),
-                                         prim.triangle_count(), uv.data(), driver.width, driver.height};
-        perceptual::TriangleStageOptions topt = o.triangle;
-        if (rate_scale > 0) {
-          // Rate control: each triangle may lose at most a little more than the plain resize
-          // to the requested cost would make it lose (its loss at J = sqrt(c) I, measured on
-          // its own views), so the optimizer only ever trades texels where the resize would
-          // have spent them for nothing.
-          const double s0 = rate_scale;
-          std::vector<double> g = perceptual::measure_triangles(engine, in, luminance, topt, {s0, 0, 0, s0}, which);
-          topt.epsilons.assign(prim.triangle_count(), o.triangle.epsilon);
-          for (size_t k = 0; k < which.size(); ++k) {
-            topt.epsilons[which[k]] = std::max(o.rate_margin * g[k], o.rate_floor);
-            tri.rate_epsilons.push_back(topt.epsilons[which[k]]);
-          }
-          topt.start_scale = s0;
-        }
-        if (progress) {
-          const std::string stage = "triangles (layout " + std::to_string(li) + ")";
-          topt.progress = [&progress, stage](size_t done, size_t total) { progress(stage, done, total); };
-        }
-        auto results = perceptual::optimize_triangles(engine, in, luminance, topt, which);
-        P.results[si].assign(prim.triangle_count(), perceptual::TriangleResult{});  // evaluations 0: not optimized
-        for (size_t k = 0; k < results.size(); ++k) {
-          const auto& r = results[k];
-          tri.optimized += 1;
-          tri.feasible += r.feasible;
-          if (!r.feasible) tri.infeasible_identity_gmsd.push_back(r.identity_gmsd);
-          tri.resolved += r.texels_per_pixel <= 1.0 + 1e-6;
-          tri.sampled += !r.complete;
-          tri.coarsened += r.identity_lattice > 1;
-          tri.lambda_area.push_back(r.lambda1 * r.lambda2);
-        }
-        for (size_t k = 0; k < results.size(); ++k) P.results[si][which[k]] = std::move(results[k]);
-        t_triangle += t0.seconds();
+      for (uint32_t t = 0; t < P.results[si].size(); ++t)
+        if (P.results[si][t].evaluations > 0) which.push_back(t);
+      if (which.empty()) continue;
+      perceptual::TriangleViewInput in{prim.positions.data(), prim.vertex_count(), prim.indices.data(),
+                                       prim.triangle_count(), uv.data(), driver.width, driver.height};
+      std::vector<std::vector<double>> g;
+      for (double s : curves.scales)
+        g.push_back(s < 1 ? perceptual::measure_triangles(engine, in, luminance, o.triangle, {s, 0, 0, s}, which)
+                          : std::vector<double>());
+      for (size_t k = 0; k < which.size(); ++k) {
+        const perceptual::TriangleResult& r = P.results[si][which[k]];
+        where.push_back({si, which[k]});
+        area.push_back(std::max(r.texel_area, 1e-9));
+        weight.push_back(surface_area(prim, which[k]));
+        for (size_t j = 0; j < curves.scales.size(); ++j)
+          curves.loss.push_back(curves.scales[j] < 1 ? g[j][k] : r.identity_gmsd);
       }
     }
-
-    // The equal-slope allocation over the layout's optimized triangles (a candidate's
-    // targets): each triangle's loss at a few uniform shrinks, measured on its own views.
-    if (o.optimize && o.candidates && rate_scale > 0 && P.tri.optimized > 0) {
-      Stopwatch t0;
-      perceptual::LossCurves curves;
-      curves.scales = kSlopeScales;
-      std::vector<std::pair<size_t, uint32_t>> where;  // (UV set, triangle) per allocated triangle
-      std::vector<double> area, weight;
-      for (size_t si = 0; si < L.uv_sets.size(); ++si) {
-        if (P.results[si].empty()) continue;
-        const io::Primitive& prim = asset.primitives[size_t(L.uv_sets[si].primitive)];
-        const std::vector<float>& uv = prim.uv_sets[size_t(L.uv_sets[si].tex_coord)].uv;
-        std::vector<uint32_t> which;
-        for (uint32_t t = 0; t < P.results[si].size(); ++t)
-          if (P.results[si][t].evaluations > 0) which.push_back(t);
-        if (which.empty()) continue;
-        perceptual::TriangleViewInput in{prim.positions.data(), prim.vertex_count(), prim.indices.data(),
-                                         prim.triangle_count(), uv.data(), driver.width, driver.height};
-        std::vector<std::vector<double>> g;
-        for (double s : curves.scales)
-          g.push_back(s < 1 ? perceptual::measure_triangles(engine, in, luminance, o.triangle, {s, 0, 0, s}, which)
-                            : std::vector<double>());
-        for (size_t k = 0; k < which.size(); ++k) {
-          const perceptual::TriangleResult& r = P.results[si][which[k]];
-          where.push_back({si, which[k]});
-          area.push_back(std::max(r.texel_area, 1e-9));
-          weight.push_back(surface_area(prim, which[k]));
-          for (size_t j = 0; j < curves.scales.size(); ++j)
-            curves.loss.push_back(curves.scales[j] < 1 ? g[j][k] : r.identity_gmsd);
-        }
-      }
-      const double cost = rate_scale * rate_scale;
-      const perceptual::RateAllocation alloc = perceptual::allocate_by_equal_slope(curves, area, weight, cost);
-      P.equal_slope.resize(L.uv_sets.size());
-      for (size_t si = 0; si < L.uv_sets.size(); ++si) P.equal_slope[si].assign(P.results[si].size(), 1.0);
-      for (size_t k = 0; k < where.size(); ++k) P.equal_slope[where[k].first][where[k].second] = alloc.scale[k];
-      P.equal_slope_report = {{"cost", cost},  // share of the source's texels under the triangles
-                              {"spent", alloc.spent},
-                              {"multiplier", alloc.multiplier},
-                              {"scale_quartiles", {quantile(alloc.scale, 0.25), quantile(alloc.scale, 0.5), quantile(alloc.scale, 0.75)}}};
-      t_triangle += t0.seconds();
-    }
-    // Uniform scales per packing unit (the `unit-scale` candidate).
-    if (o.optimize && o.candidates && rate_scale > 0) {
-      Stopwatch t0;
-      measure_unit_losses(asset, L, P, engine, luminance, o.triangle);
-      P.unit_cost = rate_scale * rate_scale;
-      t_triangle += t0.seconds();
-    }
-    optimized += P.tri.optimized, infeasible += P.tri.optimized - P.tri.feasible;
+    const double cost = rate_scale * rate_scale;
+    const perceptual::RateAllocation alloc = perceptual::allocate_by_equal_slope(curves, area, weight, cost);
+    P.equal_slope.resize(L.uv_sets.size());
+    for (size_t si = 0; si < L.uv_sets.size(); ++si) P.equal_slope[si].assign(P.results[si].size(), 1.0);
+    for (size_t k = 0; k < where.size(); ++k) P.equal_slope[where[k].first][where[k].second] = alloc.scale[k];
+    P.equal_slope_report = {{"cost", cost},  // share of the source's texels under the triangles
+                            {"spent", alloc.spent},
+                            {"multiplier", alloc.multiplier},
+                            {"scale_quartiles", {quantile(alloc.scale, 0.25), quantile(alloc.scale, 0.5), quantile(alloc.scale, 0.75)}}};
+    t_triangle += t0.seconds();
   }
+  // Uniform scales per packing unit (the `unit-scale` candidate).
+  if (o.optimize && o.candidates && rate_scale > 0) {
+    Stopwatch t0;
+    measure_unit_losses(asset, L, P, engine, luminance, o.triangle);
+    P.unit_cost = rate_scale * rate_scale;
+    t_triangle += t0.seconds();
+  }
+  run.optimized += P.tri.optimized, run.infeasible += P.tri.optimized - P.tri.feasible;
+}
 
-  // Candidates: the paper's targets, the same with the stretches floored, and the input's
-  // charts only repacked. Each is built into a copy of the input and scored as written
-  // (20 views against the input, eval's protocol); the best is kept. --max-gmsd sizes one
-  // layout on its own curve instead.
+// The candidate layouts (see each): the paper's targets, variants of them, the input's
+// charts repacked, per-unit scales; the isometric layout alone for flatten --assign.
+std::vector<Candidate> plan_candidates(const Run& run) {
+  const ReparamOptions& o = run.o;
+  const std::vector<Prepared>& prepared = run.prepared;
+  const size_t optimized = run.optimized;
   std::vector<Candidate> plans;
   // Nothing to reshape (every chart rigid or sharing texels): the repack is every candidate.
   const bool reshape = o.optimize && (optimized > 0 || o.max_gmsd > 0);
@@ -1183,69 +1202,80 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
     iso.isometric = true;
     plans.push_back(iso);
   }
-  // Scored as written against the input, the input's layout and 20 views set up once.
-  const bool scoring = !prepared.empty() && (plans.size() > 1 || (o.max_gmsd <= 0 && (o.guard || o.least_squares_bake)));
-  std::unique_ptr<eval::AsWrittenScorer> scorer;
-  std::string score_failure;
-  double t_score = 0;
-  if (scoring) {
-    Stopwatch t0;
-    eval::EvalOptions score_options;
-    score_options.artifacts = false;
-    score_options.resolution = o.score_resolution, score_options.filter = o.score_filter;
-    score_options.shading = o.score_shading;
-    score_options.noise_floor = false;  // eval's 7 extra renders; the candidates are compared as measured
-    try {
-      scorer = std::make_unique<eval::AsWrittenScorer>(original, engine, score_options);
-      const auto& r = scorer->resolution();
-      report["scoring"] = {{"resolution", r.resolution},          {"filter", eval::to_string(o.score_filter)},
-                           {"resolution_capped", r.capped},       {"resolved_fraction", r.resolved_fraction},
-                           {"shading", eval::to_string(scorer->shading())}};
-      if (!scorer->shading_warning().empty()) warnings.push_back("scoring: " + scorer->shading_warning());
-    } catch (const InputError& e) {
-      // eval cannot score this asset (e.g. no UV area to frame): keep the paper's layout,
-      // skip the guard, and say so.
-      score_failure = e.what();
-      warnings.push_back("candidates and the resize guard skipped: eval cannot score this asset (" + score_failure + ")");
-    }
-    t_score += t0.seconds();
+  return plans;
+}
+
+// Candidates and the guard are scored as written against the input, its layout and 20
+// views set up once. When eval cannot score the asset, reparam keeps the paper's layout
+// and says so.
+void set_up_scoring(Run& run) {
+  const ReparamOptions& o = run.o;
+  json& warnings = run.warnings;
+  std::string& score_failure = run.score_failure;
+  std::unique_ptr<eval::AsWrittenScorer>& scorer = run.scorer;
+  const io::GltfFile& original = run.original;
+  engine::Engine& engine = run.engine;
+  double& t_score = run.t_score;
+  Stopwatch t0;
+  eval::EvalOptions score_options;
+  score_options.artifacts = false;
+  score_options.resolution = o.score_resolution, score_options.filter = o.score_filter;
+  score_options.shading = o.score_shading;
+  score_options.noise_floor = false;  // eval's 7 extra renders; the candidates are compared as measured
+  try {
+    scorer = std::make_unique<eval::AsWrittenScorer>(original, engine, score_options);
+    run.result.scoring = ReparamResult::Scoring{scorer->resolution(), o.score_filter, scorer->shading()};
+    if (!scorer->shading_warning().empty()) warnings.push_back("scoring: " + scorer->shading_warning());
+  } catch (const InputError& e) {
+    // eval cannot score this asset (e.g. no UV area to frame): keep the paper's layout,
+    // skip the guard, and say so.
+    score_failure = e.what();
+    warnings.push_back("candidates and the resize guard skipped: eval cannot score this asset (" + score_failure + ")");
   }
-  // Scores a layout as written over eval's views: a stage of its own on the progress display.
-  auto score = [&](const io::GltfFile& f, const std::string& name) {
-    Stopwatch t0;
-    if (progress) progress("score (" + name + ")", 0, 1);
-    const eval::Scored scored = scorer->score(f);
-    if (progress) progress("score (" + name + ")", 1, 1);
-    t_score += t0.seconds();
-    return scored;
-  };
-  // Builds a candidate, scores it, and keeps it when it is the first or scores better.
-  json candidates = json::array();
-  Realized chosen;
-  Candidate chosen_plan;
-  bool have = false;
-  auto consider = [&](const Candidate& c) {
-    io::GltfFile f = original;
-    Realized r = realize(asset, layouts, prepared, layout_base, f, engine, o, c, progress, warnings);
-    if (scorer && r.overlaps_new == 0) r.q = score(f, r.name).q;
-    candidates.push_back({{"name", r.name},
-                          {"cost_ratio", r.old_texels > 0 ? r.new_texels / r.old_texels : 1.0},
-                          {"q", r.q >= 0 ? json(r.q) : json(nullptr)},
-                          {"overlaps_new", r.overlaps_new}});
-    // New UV overlaps disqualify a layout whatever its score: never written.
-    if (r.overlaps_new > 0) return;
-    if (!have || (r.q >= 0 && r.q < chosen.q)) chosen = std::move(r), file = std::move(f), chosen_plan = c, have = true;
-  };
+  t_score += t0.seconds();
+}
+
+// Scores a layout as written over eval's views: a stage of its own on the progress display.
+eval::Scored score(Run& run, const io::GltfFile& f, const std::string& name) {
+  Stopwatch t0;
+  if (run.progress) run.progress("score (" + name + ")", 0, 1);
+  const eval::Scored scored = run.scorer->score(f);
+  if (run.progress) run.progress("score (" + name + ")", 1, 1);
+  run.t_score += t0.seconds();
+  return scored;
+}
+
+// Builds a candidate into a copy of the input, scores it, and keeps it (in run.file) when
+// it is the first or scores better.
+void consider_candidate(Run& run, const Candidate& c) {
+  io::GltfFile f = run.original;
+  Realized r = realize(run.asset, run.layouts, run.prepared, run.layout_base, f, run.engine, run.o, c, run.progress,
+                       run.warnings);
+  if (run.scorer && r.overlaps_new == 0) r.q = score(run, f, r.name).q;
+  run.result.candidates.push_back({r.name, r.old_texels > 0 ? r.new_texels / r.old_texels : 1.0, r.q, r.overlaps_new});
+  // New UV overlaps disqualify a layout whatever its score: never written.
+  if (r.overlaps_new > 0) return;
+  const bool have = !run.chosen.name.empty();
+  if (!have || (r.q >= 0 && r.q < run.chosen.q)) run.chosen = std::move(r), run.file = std::move(f), run.chosen_plan = c;
+}
+
+// Every plan built and scored, the best kept; then the kept layout with the least-squares
+// bake and with wider gutters, each kept only when it scores better.
+void choose_layout(Run& run, const std::vector<Candidate>& plans) {
+  const ReparamOptions& o = run.o;
+  const auto& scorer = run.scorer;
+  const Candidate& chosen_plan = run.chosen_plan;
+  auto consider = [&run](const Candidate& c) { consider_candidate(run, c); };
   // The base plans' scores, for the runner-up below.
   std::vector<std::pair<double, size_t>> base_scores;
   for (size_t i = 0; i < plans.size(); ++i) {
     consider(plans[i]);
-    if (candidates.back()["q"].is_number() && candidates.back()["overlaps_new"] == 0)
-      base_scores.push_back({candidates.back()["q"].get<double>(), i});
+    const CandidateScore& scored = run.result.candidates.back();
+    if (scored.q >= 0 && scored.overlaps_new == 0) base_scores.push_back({scored.q, i});
   }
-  if (!prepared.empty() && !have)
-    throw InputError(file.path, "every layout built has triangles overlapping in UV that did not in the input "
-                                "(see overlaps_new); nothing written");
+  if (!run.prepared.empty() && run.chosen.name.empty())
+    throw InputError(run.file.path, "every layout built has triangles overlapping in UV that did not in the input "
+                                    "(see overlaps_new); nothing written");
   const std::string kept_base = chosen_plan.name;  // the plan the variants below start from
   // The kept layout once more with the least-squares re-bake (the texels whose bilinear
   // reconstruction is closest to the source over the surface), with the unreshaped charts'
@@ -1283,165 +1313,202 @@ json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o
       consider(c);
     }
   }
-  if (!o.curve_costs.empty() && scorer) {
-    json curve = json::array(), ignored = json::array();
-    for (double c : o.curve_costs) {
-      ReparamOptions at = o;
-      at.cost = c, at.size = 0;
-      io::GltfFile f = original;
-      realize(asset, layouts, prepared, layout_base, f, engine, at, chosen_plan, {}, ignored);
-      char name[64];
-      std::snprintf(name, sizeof name, "curve at c_r %.2f", c);
-      const auto scored = score(f, name);
-      curve.push_back({{"c_r", scored.c_r}, {"q", scored.q}});
-    }
-    report["curve"] = curve;
+}
+
+// The kept layout built and written at each of o.curve_costs, scored as written: reparam's
+// own q-c curve (bench quality).
+void build_curve(Run& run) {
+  const ReparamOptions& o = run.o;
+  json ignored = json::array();  // the curve's layouts warn as the kept one did
+  std::vector<std::pair<double, double>> curve;
+  for (double c : o.curve_costs) {
+    ReparamOptions at = o;
+    at.cost = c, at.size = 0;
+    io::GltfFile f = run.original;
+    realize(run.asset, run.layouts, run.prepared, run.layout_base, f, run.engine, at, run.chosen_plan, {}, ignored);
+    char name[64];
+    std::snprintf(name, sizeof name, "curve at c_r %.2f", c);
+    const auto scored = score(run, f, name);
+    curve.push_back({scored.c_r, scored.q});
   }
+  run.result.curve = std::move(curve);
+}
+
+// The guard: the same texels spent on a plain resize of the input (Lanczos-3, what users'
+// tools do). Whichever looks better on screen is written; --force-reparam skips this.
+void guard_against_resize(Run& run) {
+  const io::GltfFile& original = run.original;
+  io::GltfFile& file = run.file;
+  Realized& chosen = run.chosen;
+  std::string& chosen_by = run.chosen_by;
+  json& warnings = run.warnings;
+  double& t_score = run.t_score;
+  Stopwatch t0;
+  std::vector<std::pair<int, std::array<uint32_t, 2>>> sizes;
+  for (const auto& t : chosen.textures) {
+    // The same texels at the image's own aspect ratio: a user's resize keeps the shape
+    // even where the packer chose another one.
+    const double w0 = t["old_size"][0].get<double>(), h0 = t["old_size"][1].get<double>();
+    const double texels = t["new_size"][0].get<double>() * t["new_size"][1].get<double>();
+    const uint32_t w = std::max(1u, uint32_t(std::lround(std::sqrt(texels * w0 / h0))));
+    const uint32_t h = std::max(1u, uint32_t(std::lround(texels / w)));
+    sizes.push_back({t["image"].get<int>(), {w, h}});
+  }
+  io::GltfFile resized = original;
+  resize_images(resized, sizes);
+  t_score += t0.seconds();  // the resize; score() counts itself
+  const double q_resize = score(run, resized, "the plain resize").q;
+  Guard& guard = run.result.guard;
+  guard.ran = true, guard.q_reparam = chosen.q, guard.q_resize = q_resize;
+  // A layout that was not scored (q < 0) never wins against one that was.
+  if (!(chosen.q >= 0 && chosen.q < q_resize)) {
+    chosen_by = "resize";
+    file = std::move(resized);
+    for (auto& t : chosen.textures) t["new_bytes"] = file.image_bytes[size_t(t["image"].get<int>())].size();
+    warnings.push_back("the plain resize to the same texels looks better (q " + std::to_string(q_resize) + " vs " +
+                       std::to_string(chosen.q) + "): wrote the resize");
+  }
+  guard.chosen = chosen_by;
+}
+
+// --max-gmsd: the layout made at the source density, evaluated on a cost grid (eval's
+// protocol), and its re-baked textures area-filtered down to the cheapest point of that
+// q-c curve that meets the bound.
+void size_to_max_gmsd(Run& run) {
+  const ReparamOptions& o = run.o;
+  const io::GltfFile& original = run.original;
+  io::GltfFile& file = run.file;
+  Realized& chosen = run.chosen;
+  engine::Engine& engine = run.engine;
+  const Progress& progress = run.progress;
+  json& warnings = run.warnings;
+  Stopwatch t0;
+  eval::EvalOptions eo;
+  eo.resolution = o.score_resolution, eo.filter = o.score_filter, eo.shading = o.score_shading;
+  eo.noise_floor = false;
+  eo.artifacts = false;
+  eo.cost_grid = {0.05, 0.1, 0.15, 0.2, 0.25, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0};
+  const eval::EvalResult ev = eval::evaluate(original, {{"reparam", &file}}, engine, eo, nullptr,
+                                             progress ? eval::Progress(progress) : eval::Progress());
+  const eval::LayoutResult& layout = ev.layouts[1];
+  // eval's sizes are image texels relative to the input's image: the point's width is the
+  // size to write, whatever the packing made of the written image.
+  const double full_w = layout.as_written->width;
+  double ratio = 1, chosen_q = layout.curve.back().q, chosen_c = 1;
+  bool met = false;
+  for (const auto& point : layout.curve)
+    if (point.q <= o.max_gmsd) {
+      ratio = std::min(1.0, point.width / full_w);
+      chosen_q = point.q, chosen_c = point.c_r;
+      met = true;
+      break;
+    }
+  if (!met) warnings.push_back("no size meets --max-gmsd " + std::to_string(o.max_gmsd) + "; kept the source density");
+  chosen.new_texels = 0;
+  for (auto& t : chosen.textures) {
+    const int i = t["image"].get<int>();
+    Image img = io::decode_image(file.image_bytes[size_t(i)], file.path);
+    const uint32_t w = std::max(1u, uint32_t(std::lround(img.width * ratio)));
+    const uint32_t h = std::max(1u, uint32_t(std::lround(img.height * ratio)));
+    if (w != img.width || h != img.height) {
+      file.image_bytes[size_t(i)] =
+          io::encode_image(eval::resize_area(img, w, h), io::encode_settings_of(original.image_bytes[size_t(i)]));
+    }
+    t["new_size"] = {w, h};
+    t["new_bytes"] = file.image_bytes[size_t(i)].size();
+    chosen.new_texels += double(w) * h;
+  }
+  run.result.max_gmsd = MaxGmsd{o.max_gmsd, met, chosen_c, chosen_q, ratio};
+  run.result.stages.max_gmsd_eval = t0.seconds();
+}
+
+// What each texture costs as written (texels, encoded bytes, VRAM) against the input's,
+// and against the input resized (Lanczos-3) to the same size and encoded the same way:
+// the bytes a user's resize would have cost for those texels.
+void count_texture_costs(Run& run) {
+  const io::GltfFile& original = run.original;
+  const io::GltfFile& file = run.file;
+  Stopwatch t0;
+  ReparamResult::TextureTotals& totals = run.result.texture_totals;
+  TextureCost &old_total = totals.old_cost, &new_total = totals.new_cost;
+  uint64_t &old_bytes = totals.old_bytes, &new_bytes = totals.new_bytes, &resize_bytes = totals.resize_bytes;
+  for (auto& t : run.chosen.textures) {
+    const size_t i = t["image"].get<size_t>();
+    const std::vector<uint8_t>& before = original.image_bytes[i];
+    const std::vector<uint8_t>& after = file.image_bytes[i];
+    const io::ImageHeader hb = io::read_image_header(before, file.path), ha = io::read_image_header(after, file.path);
+    const io::EncodeSettings settings = io::encode_settings_of(before);
+    const Image source = io::decode_image(before, file.path);
+    const Image resized = ha.width == hb.width && ha.height == hb.height
+                              ? source
+                              : eval::resize_lanczos3(source, ha.width, ha.height, false);
+    const size_t resize = io::encode_image(resized, settings).size();
+    const TextureCost cb = texture_cost(hb.width, hb.height), ca = texture_cost(ha.width, ha.height);
+    t["new_size"] = {ha.width, ha.height};  // the resize's when the guard wrote it
+    t["new_bytes"] = after.size();
+    t["encoding"] = io::describe(settings);
+    t["old"] = cost_json(cb, before.size());
+    t["new"] = cost_json(ca, after.size());
+    t["resize_bytes"] = resize;
+    t["bytes_ratio"] = double(after.size()) / double(std::max<size_t>(1, before.size()));
+    t["bytes_vs_resize"] = double(after.size()) / double(std::max<size_t>(1, resize));
+    old_total.texels += cb.texels, old_total.vram_rgba8 += cb.vram_rgba8, old_total.vram_bc7 += cb.vram_bc7;
+    new_total.texels += ca.texels, new_total.vram_rgba8 += ca.vram_rgba8, new_total.vram_bc7 += ca.vram_bc7;
+    old_bytes += before.size(), new_bytes += after.size(), resize_bytes += resize;
+  }
+  run.result.stages.texture_costs = t0.seconds();
+}
+
+}  // namespace
+
+ReparamResult reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o, const Progress& progress,
+                      io::GltfFile* layout_out) {
+  const Stopwatch t_start;
+  Run run(file, engine, o, progress);
+  ReparamResult& result = run.result;
+  result.device = engine.device();
+  for (size_t li = 0; li < run.layouts.size(); ++li) prepare_layout(run, li);
+  const std::vector<Candidate> plans = plan_candidates(run);
+  const bool scoring =
+      !run.prepared.empty() && (plans.size() > 1 || (o.max_gmsd <= 0 && (o.guard || o.least_squares_bake)));
+  if (scoring) set_up_scoring(run);
+  choose_layout(run, plans);
+  if (!o.curve_costs.empty() && run.scorer) build_curve(run);
   if (layout_out) *layout_out = file;
-
-  // The guard: the same texels spent on a plain resize of the input (Lanczos-3, what users'
-  // tools do). Whichever looks better on screen is written; --force-reparam skips this.
-  json guard = nullptr;
-  std::string chosen_by = prepared.empty() ? "untouched" : "reparam";
-  if (!score_failure.empty()) guard = {{"skipped", score_failure}};
-  if (o.guard && o.max_gmsd <= 0 && scorer) {
-    Stopwatch t0;
-    std::vector<std::pair<int, std::array<uint32_t, 2>>> sizes;
-    for (const auto& t : chosen.textures) {
-      // The same texels at the image's own aspect ratio: a user's resize keeps the shape
-      // even where the packer chose another one.
-      const double w0 = t["old_size"][0].get<double>(), h0 = t["old_size"][1].get<double>();
-      const double texels = t["new_size"][0].get<double>() * t["new_size"][1].get<double>();
-      const uint32_t w = std::max(1u, uint32_t(std::lround(std::sqrt(texels * w0 / h0))));
-      const uint32_t h = std::max(1u, uint32_t(std::lround(texels / w)));
-      sizes.push_back({t["image"].get<int>(), {w, h}});
-    }
-    io::GltfFile resized = original;
-    resize_images(resized, sizes);
-    t_score += t0.seconds();  // the resize; score() counts itself
-    const double q_resize = score(resized, "the plain resize").q;
-    guard = {{"q_reparam", chosen.q}, {"q_resize", q_resize}, {"resize", "lanczos3-srgb"}};
-    // A layout that was not scored (q < 0) never wins against one that was.
-    if (!(chosen.q >= 0 && chosen.q < q_resize)) {
-      chosen_by = "resize";
-      file = std::move(resized);
-      for (auto& t : chosen.textures) t["new_bytes"] = file.image_bytes[size_t(t["image"].get<int>())].size();
-      warnings.push_back("the plain resize to the same texels looks better (q " + std::to_string(q_resize) + " vs " +
-                         std::to_string(chosen.q) + "): wrote the resize");
-    }
-    guard["chosen"] = chosen_by;
-  }
-
-  if (o.max_gmsd > 0 && !chosen.textures.empty()) {
-    // --max-gmsd: the cheapest point of the new layout's q-c curve that meets the bound.
-    Stopwatch t0;
-    eval::EvalOptions eo;
-    eo.resolution = o.score_resolution, eo.filter = o.score_filter, eo.shading = o.score_shading;
-    eo.noise_floor = false;
-    eo.artifacts = false;
-    eo.cost_grid = {0.05, 0.1, 0.15, 0.2, 0.25, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0};
-    json ev = eval::evaluate(original, {{"reparam", &file}}, engine, eo, nullptr,
-                             progress ? eval::Progress(progress) : eval::Progress());
-    const json& layout = ev["layouts"][1];
-    // eval's sizes are image texels relative to the input's image: the point's width is the
-    // size to write, whatever the packing made of the written image.
-    const double full_w = layout["as_written"]["width"].get<double>();
-    double ratio = 1, chosen_q = layout["curve"].back()["q"].get<double>(), chosen_c = 1;
-    bool met = false;
-    for (const auto& point : layout["curve"])
-      if (point["q"].get<double>() <= o.max_gmsd) {
-        ratio = std::min(1.0, point["width"].get<double>() / full_w);
-        chosen_q = point["q"].get<double>(), chosen_c = point["c_r"].get<double>();
-        met = true;
-        break;
-      }
-    if (!met) warnings.push_back("no size meets --max-gmsd " + std::to_string(o.max_gmsd) + "; kept the source density");
-    chosen.new_texels = 0;
-    for (auto& t : chosen.textures) {
-      const int i = t["image"].get<int>();
-      Image img = io::decode_image(file.image_bytes[size_t(i)], file.path);
-      const uint32_t w = std::max(1u, uint32_t(std::lround(img.width * ratio)));
-      const uint32_t h = std::max(1u, uint32_t(std::lround(img.height * ratio)));
-      if (w != img.width || h != img.height) {
-        file.image_bytes[size_t(i)] =
-            io::encode_image(eval::resize_area(img, w, h), io::encode_settings_of(original.image_bytes[size_t(i)]));
-      }
-      t["new_size"] = {w, h};
-      t["new_bytes"] = file.image_bytes[size_t(i)].size();
-      chosen.new_texels += double(w) * h;
-    }
-    report["max_gmsd"] = {{"bound", o.max_gmsd}, {"met", met}, {"c_r", chosen_c}, {"q", chosen_q}, {"scale", ratio}};
-    stages["max_gmsd_eval"] = t0.seconds();
-  }
-
-  // What each texture costs as written (texels, encoded bytes, VRAM) against the input's,
-  // and against the input resized (Lanczos-3) to the same size and encoded the same way:
-  // the bytes a user's resize would have cost for those texels.
-  {
-    Stopwatch t0;
-    TextureCost old_total, new_total;
-    uint64_t old_bytes = 0, new_bytes = 0, resize_bytes = 0;
-    for (auto& t : chosen.textures) {
-      const size_t i = t["image"].get<size_t>();
-      const std::vector<uint8_t>& before = original.image_bytes[i];
-      const std::vector<uint8_t>& after = file.image_bytes[i];
-      const io::ImageHeader hb = io::read_image_header(before, file.path), ha = io::read_image_header(after, file.path);
-      const io::EncodeSettings settings = io::encode_settings_of(before);
-      const Image source = io::decode_image(before, file.path);
-      const Image resized = ha.width == hb.width && ha.height == hb.height
-                                ? source
-                                : eval::resize_lanczos3(source, ha.width, ha.height, false);
-      const size_t resize = io::encode_image(resized, settings).size();
-      const TextureCost cb = texture_cost(hb.width, hb.height), ca = texture_cost(ha.width, ha.height);
-      t["new_size"] = {ha.width, ha.height};  // the resize's when the guard wrote it
-      t["new_bytes"] = after.size();
-      t["encoding"] = io::describe(settings);
-      t["old"] = cost_json(cb, before.size());
-      t["new"] = cost_json(ca, after.size());
-      t["resize_bytes"] = resize;
-      t["bytes_ratio"] = double(after.size()) / double(std::max<size_t>(1, before.size()));
-      t["bytes_vs_resize"] = double(after.size()) / double(std::max<size_t>(1, resize));
-      old_total.texels += cb.texels, old_total.vram_rgba8 += cb.vram_rgba8, old_total.vram_bc7 += cb.vram_bc7;
-      new_total.texels += ca.texels, new_total.vram_rgba8 += ca.vram_rgba8, new_total.vram_bc7 += ca.vram_bc7;
-      old_bytes += before.size(), new_bytes += after.size(), resize_bytes += resize;
-    }
-    report["texture_totals"] = {{"old", cost_json(old_total, old_bytes)},
-                                {"new", cost_json(new_total, new_bytes)},
-                                {"resize_bytes", resize_bytes}};
-    stages["texture_costs"] = t0.seconds();
-  }
+  run.chosen_by = run.prepared.empty() ? "untouched" : "reparam";
+  result.guard.skipped = run.score_failure;
+  if (o.guard && o.max_gmsd <= 0 && run.scorer) guard_against_resize(run);
+  if (o.max_gmsd > 0 && !run.chosen.textures.empty()) size_to_max_gmsd(run);
+  count_texture_costs(run);
   // Nothing the replacement left unreferenced is written (the old UV accessors, their
   // bufferViews, the old image bytes); what the input itself left unused stays.
-  const io::PruneResult pruned = io::prune_replaced(file, original.model);
-  report["pruned"] = {{"accessors", pruned.accessors}, {"buffer_views", pruned.buffer_views}, {"buffer_bytes", pruned.buffer_bytes}};
-  if (!pruned.skipped.empty()) {
-    report["pruned"]["skipped"] = pruned.skipped;
-    warnings.push_back("unreferenced accessors and bufferViews kept: " + pruned.skipped);
-  }
+  result.pruned = io::prune_replaced(file, run.original.model);
+  if (!result.pruned.skipped.empty())
+    run.warnings.push_back("unreferenced accessors and bufferViews kept: " + result.pruned.skipped);
 
-  stages["triangle_stage"] = t_triangle;
-  stages["mesh_stage"] = chosen.t_mesh;
-  stages["pack"] = chosen.t_pack;
-  stages["rebake"] = chosen.t_bake;
-  stages["candidates_and_guard"] = t_score;
-  report["chosen"] = chosen_by;
-  report["layout"] = chosen.name;
-  report["candidates"] = candidates;
-  report["guard"] = guard;
-  report["q"] = chosen_by == "resize" ? guard["q_resize"] : (chosen.q >= 0 ? json(chosen.q) : json(nullptr));
-  report["layouts"] = chosen.layouts;
-  report["textures"] = chosen.textures;
-  report["cost_ratio"] = chosen.old_texels > 0 ? chosen.new_texels / chosen.old_texels : 1.0;
-  report["flips"] = chosen_by == "resize" ? 0 : chosen.flips;
-  report["overlaps_new"] = chosen_by == "resize" ? 0 : chosen.overlaps_new;  // always 0 in a written file
-  report["overlap_fallback_charts"] = chosen_by == "resize" ? 0 : chosen.overlap_fallback_charts;
-  report["charts"] = chosen.charts;
-  report["triangles_optimized"] = optimized;
-  report["triangles_infeasible"] = infeasible;
-  report["stages"] = stages;
-  report["warnings"] = warnings;
-  report["seconds"] = t_start.seconds();
-  return report;
+  const Realized& chosen = run.chosen;
+  const bool resized = run.chosen_by == "resize";
+  result.stages.triangle_stage = run.t_triangle;
+  result.stages.mesh_stage = chosen.t_mesh;
+  result.stages.pack = chosen.t_pack;
+  result.stages.rebake = chosen.t_bake;
+  result.stages.candidates_and_guard = run.t_score;
+  result.chosen = run.chosen_by;
+  result.layout = chosen.name;
+  if (resized) result.q = result.guard.q_resize;
+  else if (chosen.q >= 0) result.q = chosen.q;
+  result.layouts = chosen.layouts;
+  result.textures = chosen.textures;
+  result.cost_ratio = chosen.old_texels > 0 ? chosen.new_texels / chosen.old_texels : 1.0;
+  result.flips = resized ? 0 : chosen.flips;
+  result.overlaps_new = resized ? 0 : chosen.overlaps_new;  // always 0 in a written file
+  result.overlap_fallback_charts = resized ? 0 : chosen.overlap_fallback_charts;
+  result.charts = chosen.charts;
+  result.triangles_optimized = run.optimized;
+  result.triangles_infeasible = run.infeasible;
+  for (const auto& w : run.warnings) result.warnings.push_back(w.get<std::string>());
+  result.seconds = t_start.seconds();
+  return result;
 }
 
 }  // namespace uvpress::pipeline

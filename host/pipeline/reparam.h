@@ -8,14 +8,19 @@
 #include "engine.h"
 #include "eval/eval.h"
 #include "flatten/flatten.h"
+#include "core/texture_cost.h"
 #include "io/gltf_io.h"
+#include "io/gltf_prune.h"
 #include "perceptual/triangle_stage.h"
 
 #include <nlohmann/json.hpp>
 
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace uvpress::pipeline {
 
@@ -85,15 +90,85 @@ struct ReparamOptions {
 // Progress: stage name, done, total (for a stderr bar on long runs).
 using Progress = std::function<void(const std::string& stage, size_t done, size_t total)>;
 
-// Re-parameterizes `file` in place (model and image_bytes). Returns the report: device,
-// layouts, textures (old/new size and bytes), cost_ratio, flips, charts, packing
-// efficiency, per-stage seconds, warnings (e.g. tiled layouts left untouched).
-// The report also says which candidate layout was kept (`layout`, `candidates` with each
-// one's cost and 20-view q as written) and what the guard decided (`chosen`: "reparam",
-// "resize" or "untouched"; `guard`: both q values). `layout_out`, when given, receives
-// reparam's kept layout as built even when the guard writes the resize (bench quality
-// scores that layout's own curve).
-nlohmann::ordered_json reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& options,
-                               const Progress& progress = {}, io::GltfFile* layout_out = nullptr);
+// One candidate layout as built and scored as written (report: candidates[]).
+struct CandidateScore {
+  std::string name;
+  double cost_ratio = 1;    // new image texels / old
+  double q = -1;            // 20-view q as written; < 0: not scored
+  size_t overlaps_new = 0;  // > 0: disqualified, never written
+};
+
+// The never-worse guard (report: guard): the kept layout against the input resized
+// (Lanczos-3) to the same texels, by the same 20-view q; the better is written.
+struct Guard {
+  bool ran = false;
+  std::string skipped;  // why eval could not score the asset, when it could not
+  double q_reparam = -1, q_resize = -1;
+  std::string chosen;   // "reparam" | "resize"
+};
+
+// --max-gmsd (report: max_gmsd): the cheapest point of the layout's curve that meets the bound.
+struct MaxGmsd {
+  double bound = 0;
+  bool met = false;
+  double c_r = 1, q = 0;
+  double scale = 1;  // of every re-baked texture
+};
+
+struct StageSeconds {
+  std::optional<double> max_gmsd_eval;  // --max-gmsd's curve
+  double texture_costs = 0, triangle_stage = 0, mesh_stage = 0, pack = 0, rebake = 0;
+  double candidates_and_guard = 0;  // scoring candidates and the resize as written
+};
+
+// What reparam did to the file (README, "reparam report"; to_json is that report).
+struct ReparamResult {
+  engine::DeviceInfo device;
+  // The views candidates and the guard were scored with, when they were.
+  struct Scoring {
+    eval::ViewResolution resolution;
+    eval::TextureFilter filter = eval::TextureFilter::Trilinear;
+    eval::Shading shading = eval::Shading::Unlit;
+  };
+  std::optional<Scoring> scoring;
+  // With ReparamOptions::curve_costs: the kept layout built and written at each cost,
+  // scored as written: (c_r, q) by the costs' order.
+  std::optional<std::vector<std::pair<double, double>>> curve;
+  std::optional<MaxGmsd> max_gmsd;
+  // Every re-baked texture's costs, before and after, and the bytes the input resized to
+  // the same size would take (texture_costs.h).
+  struct TextureTotals {
+    TextureCost old_cost, new_cost;
+    uint64_t old_bytes = 0, new_bytes = 0, resize_bytes = 0;
+  } texture_totals;
+  io::PruneResult pruned;
+  std::string chosen;  // "reparam", "resize" or "untouched"
+  std::string layout;  // the kept candidate's name
+  std::vector<CandidateScore> candidates;
+  Guard guard;
+  std::optional<double> q;  // the written file's 20-view q, when scored
+  // Per UV layout and per re-baked texture, the details the README lists (sizes, scales,
+  // packing, triangle-stage counts, bytes); layouts[i] is layout i of the file.
+  nlohmann::ordered_json layouts, textures;
+  double cost_ratio = 1;  // new image texels / old over the re-baked textures
+  size_t flips = 0, overlaps_new = 0, overlap_fallback_charts = 0, charts = 0;
+  size_t triangles_optimized = 0, triangles_infeasible = 0;
+  StageSeconds stages;
+  std::vector<std::string> warnings;
+  double seconds = 0;
+
+  // True when some layout was capped at the source's texel density (a cost above what the
+  // source holds).
+  bool capped_at_source_density() const;
+  nlohmann::ordered_json to_json() const;
+};
+
+// Re-parameterizes `file` in place (model and image_bytes): the layouts found, each
+// prepared (charts, triangle stage), the candidate layouts built and scored, the best
+// kept, the guard against a plain resize, --max-gmsd, the costs, and what the replacement
+// left unused pruned. `layout_out`, when given, receives reparam's kept layout as built
+// even when the guard writes the resize (bench quality scores that layout's own curve).
+ReparamResult reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& options,
+                      const Progress& progress = {}, io::GltfFile* layout_out = nullptr);
 
 }  // namespace uvpress::pipeline

@@ -291,28 +291,29 @@ TEST_CASE("eval: a layout against itself at c_r = 1 gives q = 0, q_r falls as c_
   o.cost_grid = {0.1, 0.3, 1.0};
   o.artifacts = false;
   o.noise_floor = false;
-  auto r = eval::evaluate(file, {}, *cpu, o);
-  REQUIRE(r["views"] == 20);
-  CHECK(r["resolved_fraction"].get<double>() >= 0.95);
-  const auto& curve = r["layouts"][0]["curve"];
+  const eval::EvalResult r = eval::evaluate(file, {}, *cpu, o);
+  REQUIRE(r.views == 20);
+  CHECK(r.resolution.resolved_fraction >= 0.95);
+  const auto& curve = r.layouts[0].curve;
   REQUIRE(curve.size() == 3);
   // Same texture, same UVs, same renders: GMSD of identical images is exactly 0 (tolerance
   // 1e-12 only guards the printing).
-  CHECK(curve[2]["q"].get<double>() <= 1e-12);
-  CHECK(curve[2]["width"] == 512);
-  CHECK(curve[0]["q"].get<double>() > curve[1]["q"].get<double>());
-  CHECK(curve[1]["q"].get<double>() > curve[2]["q"].get<double>());
-  CHECK(curve[0]["c_r_actual"].get<double>() == Approx(0.1).epsilon(0.02));
+  CHECK(curve[2].q <= 1e-12);
+  CHECK(curve[2].width == 512);
+  CHECK(curve[0].q > curve[1].q);
+  CHECK(curve[1].q > curve[2].q);
+  CHECK(curve[0].c_r_actual == Approx(0.1).epsilon(0.02));
   // Costs are image texels; the input is resized as users do, the stronger variant kept.
-  CHECK(r["cost_measure"] == "image_texels");
-  const auto& L = r["layouts"][0];
-  REQUIRE(L["resize"] == r["input_resize"]);
-  const double srgb = L["resize_mean_log_q"]["lanczos3-srgb"], linear = L["resize_mean_log_q"]["lanczos3-linear"];
-  CHECK(L["resize"] == (linear < srgb ? "lanczos3-linear" : "lanczos3-srgb"));
-  CHECK(std::min(srgb, linear) == Approx(std::log(std::max(curve[0]["q"].get<double>(), 1e-9)) / 3 +
-                                         std::log(std::max(curve[1]["q"].get<double>(), 1e-9)) / 3 +
-                                         std::log(std::max(curve[2]["q"].get<double>(), 1e-9)) / 3));
-  CHECK(!L.contains("as_written"));  // the reference is not scored against itself
+  CHECK(r.to_json()["cost_measure"] == "image_texels");
+  const auto& L = r.layouts[0];
+  REQUIRE(L.resize == r.input_resize);
+  REQUIRE(L.resize_mean_log_q);
+  const auto [srgb, linear] = *L.resize_mean_log_q;
+  CHECK(L.resize == (linear < srgb ? "lanczos3-linear" : "lanczos3-srgb"));
+  CHECK(std::min(srgb, linear) == Approx(std::log(std::max(curve[0].q, 1e-9)) / 3 +
+                                         std::log(std::max(curve[1].q, 1e-9)) / 3 +
+                                         std::log(std::max(curve[2].q, 1e-9)) / 3));
+  CHECK(!L.as_written);  // the reference is not scored against itself
 }
 
 TEST_CASE("eval: the paper's baseline re-bakes the input layout and area-filters it", "[eval]") {
@@ -323,19 +324,19 @@ TEST_CASE("eval: the paper's baseline re-bakes the input layout and area-filters
   o.cost_grid = {0.25, 1.0};
   o.artifacts = false;
   o.paper_baseline = true;
-  auto r = eval::evaluate(file, {}, *cpu, o);
-  REQUIRE(r["layouts"].size() == 2);
-  const auto& L = r["layouts"][1];
-  CHECK(L["name"] == "input-rebaked");
-  CHECK(L["texture"] == "rebaked");
-  CHECK(L["resize"] == "area");
-  CHECK(L["curve"][1]["q"].get<double>() < 1e-3);  // an identity re-bake at the same size is (nearly) exact
+  const eval::EvalResult r = eval::evaluate(file, {}, *cpu, o);
+  REQUIRE(r.layouts.size() == 2);
+  const auto& L = r.layouts[1];
+  CHECK(L.name == "input-rebaked");
+  CHECK(L.texture == "rebaked");
+  CHECK(L.resize == "area");
+  CHECK(L.curve[1].q < 1e-3);  // an identity re-bake at the same size is (nearly) exact
   // At a quarter of the texels the area filter differs from the Lanczos resize.
-  CHECK(L["curve"][0]["q"].get<double>() != r["layouts"][0]["curve"][0]["q"].get<double>());
+  CHECK(L.curve[0].q != r.layouts[0].curve[0].q);
   bool vs_paper = false;
-  for (const auto& sv : r["savings"]) vs_paper = vs_paper || sv["vs"] == "input-rebaked";
+  for (const auto& sv : r.savings) vs_paper = vs_paper || sv.vs == "input-rebaked";
   CHECK(!vs_paper);  // nothing but the input to set against it here
-  CHECK(r["savings"].size() == 1);
+  CHECK(r.savings.size() == 1);
 }
 
 TEST_CASE("eval: a file is scored as written, at its own texture's real size", "[eval]") {
@@ -352,8 +353,8 @@ TEST_CASE("eval: a file is scored as written, at its own texture's real size", "
   CHECK(same.q <= 1e-12);
   // The asset with its texture halved a side by a user's resize: c_r = 0.25, and q is the
   // input curve's point there (up to the 8-bit rounding of the written PNG).
-  auto full = eval::evaluate(file, {}, *cpu, o);
-  const bool linear = full["input_resize"] == "lanczos3-linear";
+  const eval::EvalResult full = eval::evaluate(file, {}, *cpu, o);
+  const bool linear = full.input_resize == "lanczos3-linear";
   io::GltfFile half = file;
   half.path = "half.glb";
   Image img = io::decode_image(file.image_bytes[0], "demo");
@@ -363,18 +364,19 @@ TEST_CASE("eval: a file is scored as written, at its own texture's real size", "
   auto scored = eval::score_as_written(file, half, *cpu, o);
   CHECK(scored.c_r == Approx(0.25));
   CHECK(scored.c_r_chart == Approx(0.25));
-  const double q_curve = full["layouts"][0]["curve"][0]["q"].get<double>();
+  const double q_curve = full.layouts[0].curve[0].q;
   REQUIRE(q_curve > 0);
   CHECK(scored.q == Approx(q_curve).epsilon(0.05));
   // evaluate reports the same point for the file, beside its re-baked curve.
-  auto r = eval::evaluate(file, {{"half", &half}}, *cpu, o);
-  REQUIRE(r["layouts"].size() == 2);
-  const auto& aw = r["layouts"][1]["as_written"];
-  CHECK(aw["c_r"].get<double>() == Approx(scored.c_r));
-  CHECK(aw["q"].get<double>() == Approx(scored.q).epsilon(1e-9));
-  CHECK(aw["width"] == img.width / 2);
+  const eval::EvalResult r = eval::evaluate(file, {{"half", &half}}, *cpu, o);
+  REQUIRE(r.layouts.size() == 2);
+  REQUIRE(r.layouts[1].as_written);
+  const auto& aw = *r.layouts[1].as_written;
+  CHECK(aw.c_r == Approx(scored.c_r));
+  CHECK(aw.q == Approx(scored.q).epsilon(1e-9));
+  CHECK(aw.width == img.width / 2);
   // Its curve re-bakes the reference's full texture, so at c_r = 1 it is near lossless.
-  CHECK(r["layouts"][1]["curve"][1]["q"].get<double>() < 0.02);
+  CHECK(r.layouts[1].curve[1].q < 0.02);
 }
 
 TEST_CASE("eval: the isometric layout and another file of the same mesh, report and savings", "[eval]") {
@@ -388,34 +390,37 @@ TEST_CASE("eval: the isometric layout and another file of the same mesh, report 
   o.flatten = true;
   o.thumbnail = 32;
   eval::EvalArtifacts art;
-  auto r = eval::evaluate(file, {{"copy", &copy}}, *cpu, o, &art);
-  REQUIRE(r["layouts"].size() == 3);
-  CHECK(r["layouts"][1]["name"] == "copy");
-  CHECK(r["layouts"][1]["texture"] == "rebaked");
-  CHECK(r["layouts"][2]["name"] == "flatten");
-  for (const auto& L : r["layouts"])
-    for (const auto& p : L["curve"]) CHECK(p["q"].get<double>() >= 0);
+  const eval::EvalResult r = eval::evaluate(file, {{"copy", &copy}}, *cpu, o, &art);
+  REQUIRE(r.layouts.size() == 3);
+  CHECK(r.layouts[1].name == "copy");
+  CHECK(r.layouts[1].texture == "rebaked");
+  CHECK(r.layouts[2].name == "flatten");
+  for (const auto& L : r.layouts)
+    for (const auto& p : L.curve) CHECK(p.q >= 0);
   // A re-bake of the same layout at the same size is close to the original.
-  CHECK(r["layouts"][1]["curve"][2]["q"].get<double>() < 0.02);
-  REQUIRE(r["savings"].size() >= 2);
-  for (const auto& s : r["savings"]) {
+  CHECK(r.layouts[1].curve[2].q < 0.02);
+  REQUIRE(r.savings.size() >= 2);
+  // The report: every savings row names both layouts and the ratio (null when the curves
+  // share no q range).
+  const auto report = r.to_json();
+  for (const auto& s : report["savings"]) {
     CHECK(s.contains("layout"));
     CHECK(s.contains("vs"));
     CHECK(s.contains("pixel_ratio_at_equal_q"));
   }
   // Image texels: every layout's texture at c_r = 1 has the reference's W x H; the paper's
   // chart cost differs by the layouts' UV areas.
-  for (const auto& L : r["layouts"]) {
-    const auto& p = L["curve"][2];
-    CHECK(p["width"].get<double>() * p["height"].get<double>() == Approx(128.0 * 128.0).epsilon(0.02));
-    CHECK(p["c_r_chart"].get<double>() ==
-          Approx(p["c_r_actual"].get<double>() * L["uv_area"].get<double>() / r["reference"]["uv_area"].get<double>()));
+  for (const auto& L : r.layouts) {
+    const auto& p = L.curve[2];
+    CHECK(double(p.width) * p.height == Approx(128.0 * 128.0).epsilon(0.02));
+    CHECK(p.c_r_chart == Approx(p.c_r_actual * L.uv_area / r.reference.uv_area));
   }
-  CHECK(r["layouts"][2]["uv_area"].get<double>() != Approx(r["layouts"][0]["uv_area"].get<double>()));
+  CHECK(r.layouts[2].uv_area != Approx(r.layouts[0].uv_area));
   // The copy as written is the reference itself.
-  CHECK(r["layouts"][1]["as_written"]["c_r"].get<double>() == 1.0);
-  CHECK(r["layouts"][1]["as_written"]["q"].get<double>() <= 1e-12);
-  CHECK(!r["layouts"][2].contains("as_written"));
+  REQUIRE(r.layouts[1].as_written);
+  CHECK(r.layouts[1].as_written->c_r == 1.0);
+  CHECK(r.layouts[1].as_written->q <= 1e-12);
+  CHECK(!r.layouts[2].as_written);
   CHECK(art.layouts.size() == 3);
   CHECK(art.reference_contact.width == 5 * 32);
 }

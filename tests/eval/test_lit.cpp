@@ -104,11 +104,11 @@ io::GltfFile bumpy_sheet(bool normal_map, int texture = 128, int grid = 24) {
   return file;
 }
 
-const nlohmann::ordered_json& curve_point(const nlohmann::ordered_json& report, double c_r) {
-  for (const auto& p : report["layouts"][0]["curve"])
-    if (std::abs(p["c_r"].get<double>() - c_r) < 1e-9) return p;
+const eval::CurvePoint& curve_point(const eval::EvalResult& report, double c_r) {
+  for (const auto& p : report.layouts[0].curve)
+    if (std::abs(p.c_r - c_r) < 1e-9) return p;
   FAIL("no curve point at c_r " << c_r);
-  return report;
+  return report.layouts[0].curve[0];
 }
 
 }  // namespace
@@ -120,36 +120,36 @@ TEST_CASE("lit q sees a halved normal map that the unlit q cannot", "[eval][lit]
   o.cost_grid = {0.25, 1.0};
   o.artifacts = false;
   auto t0 = std::chrono::steady_clock::now();
-  const auto lit = eval::evaluate(asset, {}, *engine, o);  // auto: the asset has a normal map
+  const eval::EvalResult lit = eval::evaluate(asset, {}, *engine, o);  // auto: the asset has a normal map
   const double lit_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  REQUIRE(lit["shading"] == "lit");
-  REQUIRE(lit["shading_requested"] == "auto");
-  const double floor_unlit = lit["noise_floor_unlit"], floor_lit = lit["noise_floor_lit"];
-  REQUIRE(lit["noise_floor"].get<double>() == floor_lit);
+  REQUIRE(lit.lit);
+  REQUIRE(lit.shading_requested == eval::Shading::Auto);
+  const double floor_unlit = lit.noise_floor_unlit, floor_lit = lit.noise_floor_lit;
+  REQUIRE(lit.noise_floor() == floor_lit);
   const auto& quarter = curve_point(lit, 0.25);
   const auto& full = curve_point(lit, 1.0);
-  REQUIRE(quarter["q"].get<double>() == quarter["q_lit"].get<double>());
+  REQUIRE(quarter.q == quarter.q_lit);
   // (1) The base colour is flat: nothing for the unlit q to see at any cost.
   // (A flat texture's Lanczos resize rounds in fp32 (1e-7), which GMSD sees at 1e-9,
   // hence the absolute allowance beside the measured floor.)
-  CHECK(std::abs(quarter["q_unlit"].get<double>() - full["q_unlit"].get<double>()) <= std::max(floor_unlit, 1e-6));
+  CHECK(std::abs(quarter.q_unlit - full.q_unlit) <= std::max(floor_unlit, 1e-6));
   // (2) The bumps are 2 texels wide: at half the side they are gone, and the lit views show it.
-  CHECK(full["q_lit"].get<double>() == Approx(0).margin(1e-6));  // the same size copies exactly
-  CHECK(quarter["q_lit"].get<double>() - full["q_lit"].get<double>() > 3 * floor_lit);
-  CHECK(quarter["q_lit"].get<double>() > 1e-3);
+  CHECK(full.q_lit == Approx(0).margin(1e-6));  // the same size copies exactly
+  CHECK(quarter.q_lit - full.q_lit > 3 * floor_lit);
+  CHECK(quarter.q_lit > 1e-3);
 
   // The unlit q of a lit evaluation is the unlit evaluation's, bit for bit.
   o.shading = eval::Shading::Unlit;
   t0 = std::chrono::steady_clock::now();
-  const auto unlit = eval::evaluate(asset, {}, *engine, o);
+  const eval::EvalResult unlit = eval::evaluate(asset, {}, *engine, o);
   const double unlit_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  REQUIRE(unlit["shading"] == "unlit");
+  REQUIRE(!unlit.lit);
   // (Curves: each evaluation keeps the input resize its own q prefers, so compare the
   // noise floors, measured with one resize, and the as-written scores below.)
-  CHECK(unlit["noise_floor"].get<double>() == floor_unlit);
+  CHECK(unlit.noise_floor() == floor_unlit);
   WARN("lit eval " << lit_seconds << " s, unlit " << unlit_seconds << " s (" << lit_seconds / unlit_seconds
-                   << "x); lit q at c_r 0.25 " << quarter["q_lit"].get<double>() << " (floor " << floor_lit
-                   << "), unlit " << quarter["q_unlit"].get<double>() << " (floor " << floor_unlit << ")");
+                   << "x); lit q at c_r 0.25 " << quarter.q_lit << " (floor " << floor_lit
+                   << "), unlit " << quarter.q_unlit << " (floor " << floor_unlit << ")");
 
   // The as-written scorer (reparam's guard) uses the lit q on this asset, and its unlit q
   // is the unlit scorer's, bit for bit.
@@ -179,21 +179,21 @@ TEST_CASE("assets without a normal map keep bit-identical figures under --shadin
   o.cost_grid = {0.3, 0.6};
   o.artifacts = false;
   o.noise_floor = false;
-  const auto automatic = eval::evaluate(demo, {}, *engine, o);
+  const eval::EvalResult automatic = eval::evaluate(demo, {}, *engine, o);
   o.shading = eval::Shading::Unlit;
-  const auto unlit = eval::evaluate(demo, {}, *engine, o);
-  REQUIRE(automatic["shading"] == "unlit");
-  REQUIRE(!automatic["layouts"][0]["curve"][0].contains("q_lit"));
+  const eval::EvalResult unlit = eval::evaluate(demo, {}, *engine, o);
+  REQUIRE(!automatic.lit);
+  REQUIRE(!automatic.to_json()["layouts"][0]["curve"][0].contains("q_lit"));  // the report has no lit keys
   for (size_t k = 0; k < 2; ++k) {
-    CHECK(automatic["layouts"][0]["curve"][k]["q"].get<double>() == unlit["layouts"][0]["curve"][k]["q"].get<double>());
-    CHECK(automatic["layouts"][0]["curve"][k]["q_views"] == unlit["layouts"][0]["curve"][k]["q_views"]);
+    CHECK(automatic.layouts[0].curve[k].q == unlit.layouts[0].curve[k].q);
+    CHECK(automatic.layouts[0].curve[k].q_views == unlit.layouts[0].curve[k].q_views);
   }
   // Lit on request: the demo's base colour under the rig (no maps but the base colour).
   o.shading = eval::Shading::Lit;
-  const auto lit = eval::evaluate(demo, {}, *engine, o);
-  REQUIRE(lit["shading"] == "lit");
-  CHECK(lit["layouts"][0]["curve"][0]["q_unlit"].get<double>() == unlit["layouts"][0]["curve"][0]["q"].get<double>());
-  CHECK(lit["layouts"][0]["curve"][0]["q_lit"].get<double>() > 0);
+  const eval::EvalResult lit = eval::evaluate(demo, {}, *engine, o);
+  REQUIRE(lit.lit);
+  CHECK(lit.layouts[0].curve[0].q_unlit == unlit.layouts[0].curve[0].q);
+  CHECK(lit.layouts[0].curve[0].q_lit > 0);
 }
 
 TEST_CASE("lit shading: a normal map on another UV set or that does not decode falls back to unlit under auto, fails under lit",
@@ -208,10 +208,9 @@ TEST_CASE("lit shading: a normal map on another UV set or that does not decode f
   o.cost_grid = {1.0};
   o.artifacts = false, o.noise_floor = false;
   o.resolution = 64;
-  const auto r = eval::evaluate(asset, {}, *engine, o);
-  CHECK(r["shading"] == "unlit");
-  REQUIRE(r.contains("shading_warning"));
-  CHECK(r["shading_warning"].get<std::string>().find("TEXCOORD_1") != std::string::npos);
+  const eval::EvalResult r = eval::evaluate(asset, {}, *engine, o);
+  CHECK(!r.lit);
+  CHECK(r.shading_warning.find("TEXCOORD_1") != std::string::npos);
   o.shading = eval::Shading::Lit;
   CHECK_THROWS_WITH(eval::evaluate(asset, {}, *engine, o), Catch::Contains("cannot evaluate lit"));
 
@@ -219,10 +218,9 @@ TEST_CASE("lit shading: a normal map on another UV set or that does not decode f
   io::GltfFile broken = bumpy_sheet(true, 32, 4);
   broken.image_bytes[1] = {0x89, 'P', 'N', 'G', 0, 1, 2, 3};
   o.shading = eval::Shading::Auto;
-  const auto b = eval::evaluate(broken, {}, *engine, o);
-  CHECK(b["shading"] == "unlit");
-  REQUIRE(b.contains("shading_warning"));
-  CHECK(b["shading_warning"].get<std::string>().find("normalTexture") != std::string::npos);
+  const eval::EvalResult b = eval::evaluate(broken, {}, *engine, o);
+  CHECK(!b.lit);
+  CHECK(b.shading_warning.find("normalTexture") != std::string::npos);
   o.shading = eval::Shading::Lit;
   CHECK_THROWS_WITH(eval::evaluate(broken, {}, *engine, o), Catch::Contains("cannot evaluate lit"));
 }
@@ -371,7 +369,7 @@ TEST_CASE("reparam's candidates and guard score a normal-mapped asset lit", "[ev
   o.optimize = false;  // only repack: the scoring is what is under test
   o.cost = 0.25;
   o.score_resolution = 256;
-  const auto report = pipeline::reparam(file, *engine, o);
+  const auto report = pipeline::reparam(file, *engine, o).to_json();
   REQUIRE(report.contains("scoring"));
   CHECK(report["scoring"]["shading"] == "lit");
   // The resize to a quarter of the texels loses the 2-texel bumps: the lit guard sees it
@@ -381,7 +379,7 @@ TEST_CASE("reparam's candidates and guard score a normal-mapped asset lit", "[ev
   // --score-shading unlit: the old figures, blind to the normal map.
   io::GltfFile again = bumpy_sheet(true, 128, 12);
   o.score_shading = eval::Shading::Unlit;
-  const auto unlit = pipeline::reparam(again, *engine, o);
+  const auto unlit = pipeline::reparam(again, *engine, o).to_json();
   CHECK(unlit["scoring"]["shading"] == "unlit");
   CHECK(unlit["guard"]["q_resize"].get<double>() < 1e-6);
 }
@@ -394,10 +392,10 @@ TEST_CASE("lit q: Vulkan (lavapipe) renders agree with the CPU oracle", "[eval][
   o.cost_grid = {0.25};
   o.resolution = 128;
   o.artifacts = false, o.noise_floor = false;
-  const auto a = eval::evaluate(asset, {}, *cpu, o), b = eval::evaluate(asset, {}, *vk, o);
-  REQUIRE(a["shading"] == "lit");
-  REQUIRE(b["shading"] == "lit");
-  const double qa = a["layouts"][0]["curve"][0]["q_lit"], qb = b["layouts"][0]["curve"][0]["q_lit"];
+  const eval::EvalResult a = eval::evaluate(asset, {}, *cpu, o), b = eval::evaluate(asset, {}, *vk, o);
+  REQUIRE(a.lit);
+  REQUIRE(b.lit);
+  const double qa = a.layouts[0].curve[0].q_lit, qb = b.layouts[0].curve[0].q_lit;
   REQUIRE(qa > 0.01);
   // The lighting runs on the host either way; the map renders agree to fp32 sampling
   // (coverage is integer rasterization, the same on both).

@@ -238,29 +238,32 @@ TEST_CASE("eval: auto resolution resolves single-texel detail that 512-px views 
   eval::EvalOptions o;
   o.cost_grid = {0.5, 1.0};
   o.artifacts = false;
-  const auto automatic = eval::evaluate(file, {}, *cpu, o);
+  const eval::EvalResult automatic = eval::evaluate(file, {}, *cpu, o);
   o.resolution = 512, o.filter = eval::TextureFilter::Bilinear;
-  const auto old = eval::evaluate(file, {}, *cpu, o);
-  auto gap = [](const nlohmann::ordered_json& r) {
-    const auto& c = r["layouts"][0]["curve"];
-    return c[0]["q"].get<double>() - c[1]["q"].get<double>();
+  const eval::EvalResult old = eval::evaluate(file, {}, *cpu, o);
+  auto gap = [](const eval::EvalResult& r) {
+    const auto& c = r.layouts[0].curve;
+    return c[0].q - c[1].q;
   };
-  INFO("auto: " << automatic["resolution"] << " px, texels per pixel " << automatic["texels_per_pixel"] << ", resolved "
-                << automatic["resolved_fraction"] << ", gap " << gap(automatic) << ", noise floor "
-                << automatic["noise_floor"]);
-  INFO("bilinear 512: texels per pixel " << old["texels_per_pixel"] << ", resolved " << old["resolved_fraction"]
-                                         << ", gap " << gap(old) << ", noise floor " << old["noise_floor"]);
-  CHECK(automatic["resolution_mode"] == "auto");
-  CHECK(old["resolution_mode"] == "fixed");
-  CHECK(automatic["resolution"].get<int>() >= 1024);
-  CHECK(!automatic["resolution_capped"].get<bool>());
-  CHECK(automatic["resolved_fraction"].get<double>() >= 0.95);
-  CHECK(automatic["texels_per_pixel"]["value"].get<double>() <= 1.0);
-  CHECK(old["texels_per_pixel"]["median"].get<double>() > 1.4);  // the old views minify
-  CHECK(old["resolved_fraction"].get<double>() < 0.4);
+  const eval::ViewResolution &va = automatic.resolution, &vo = old.resolution;
+  INFO("auto: " << va.resolution << " px, texels per pixel " << va.texels_per_pixel << " (median "
+                << va.texels_per_pixel_median << "), resolved " << va.resolved_fraction << ", gap " << gap(automatic)
+                << ", noise floor " << automatic.noise_floor());
+  INFO("bilinear 512: texels per pixel " << vo.texels_per_pixel << " (median " << vo.texels_per_pixel_median
+                                         << "), resolved " << vo.resolved_fraction << ", gap " << gap(old)
+                                         << ", noise floor " << old.noise_floor());
+  CHECK(automatic.to_json()["resolution_mode"] == "auto");
+  CHECK(old.to_json()["resolution_mode"] == "fixed");
+  CHECK(va.resolution >= 1024);
+  CHECK(!va.capped);
+  CHECK(va.resolved_fraction >= 0.95);
+  CHECK(va.texels_per_pixel <= 1.0);
+  CHECK(vo.texels_per_pixel_median > 1.4);  // the old views minify
+  CHECK(vo.resolved_fraction < 0.4);
   // Halving the texels of single-texel detail is a loss the resolved views see beyond
   // their noise floor.
-  CHECK(gap(automatic) > 3 * automatic["noise_floor"].get<double>());
+  REQUIRE(automatic.noise_floor_measured);
+  CHECK(gap(automatic) > 3 * automatic.noise_floor());
 }
 
 TEST_CASE("eval: views larger than the engine's limit are tiled and score like one render", "[eval]") {
@@ -273,11 +276,11 @@ TEST_CASE("eval: views larger than the engine's limit are tiled and score like o
   o.artifacts = false;
   o.noise_floor = false;
   o.resolution = 1280;
-  const auto tiled = eval::evaluate(file, {}, *cpu, o);
-  CHECK(tiled["resolution"] == 1280);
+  const eval::EvalResult tiled = eval::evaluate(file, {}, *cpu, o);
+  CHECK(tiled.resolution.resolution == 1280);
   o.resolution = 1024;
-  const auto one = eval::evaluate(file, {}, *cpu, o);
-  const double a = tiled["layouts"][0]["curve"][0]["q"], b = one["layouts"][0]["curve"][0]["q"];
+  const eval::EvalResult one = eval::evaluate(file, {}, *cpu, o);
+  const double a = tiled.layouts[0].curve[0].q, b = one.layouts[0].curve[0].q;
   INFO("q at 1280 (tiled) " << a << ", at 1024 " << b);
   CHECK(a > 0);
   CHECK(a == Approx(b).epsilon(0.25));
@@ -303,14 +306,16 @@ TEST_CASE("eval: on every shared asset the input curve never rises with c_r beyo
     const io::GltfFile file = io::load_gltf(path.string());
     eval::EvalOptions o;  // the defaults users run: auto resolution, trilinear, the full grid
     o.artifacts = false;
-    const auto r = eval::evaluate(file, {}, *cpu, o);
-    const double floor = r["noise_floor"];
-    const auto& c = r["layouts"][0]["curve"];
-    INFO(rel << ": " << r["resolution"] << " px, resolved " << r["resolved_fraction"] << ", noise floor " << floor);
-    CHECK((r["resolved_fraction"].get<double>() >= 0.95 || r["resolution_capped"].get<bool>()));
+    const eval::EvalResult r = eval::evaluate(file, {}, *cpu, o);
+    REQUIRE(r.noise_floor_measured);
+    const double floor = r.noise_floor();
+    const auto& c = r.layouts[0].curve;
+    INFO(rel << ": " << r.resolution.resolution << " px, resolved " << r.resolution.resolved_fraction
+             << ", noise floor " << floor);
+    CHECK((r.resolution.resolved_fraction >= 0.95 || r.resolution.capped));
     for (size_t k = 1; k < c.size(); ++k) {
-      const double prev = c[k - 1]["q"], q = c[k]["q"];
-      INFO("c_r " << c[k - 1]["c_r"] << " -> " << c[k]["c_r"] << ": q " << prev << " -> " << q);
+      const double prev = c[k - 1].q, q = c[k].q;
+      INFO("c_r " << c[k - 1].c_r << " -> " << c[k].c_r << ": q " << prev << " -> " << q);
       CHECK(q <= prev + floor);
     }
     ++assets;

@@ -158,7 +158,7 @@ TEST_CASE("overlaps: reparam's output of a nearly closed strip has no new overla
   o.triangle.evaluations = 16;
   o.triangle.view_size = 16;
   o.candidates = false, o.guard = false, o.least_squares_bake = false;  // the paper's layout, written
-  auto report = pipeline::reparam(out, *engine, o);
+  auto report = pipeline::reparam(out, *engine, o).to_json();
   INFO(report["warnings"].dump(1));
   CHECK(report["overlaps_new"] == 0);
   CHECK(report["layouts"][0]["overlaps_new"] == 0);

@@ -85,7 +85,7 @@ TEST_CASE("reparam without optimization at the same cost: the textures look the 
   auto engine = engine::make_cpu_engine({});
   io::GltfFile in = io::load_gltf((*test::shared_dir() / "assets/Duck/glTF-Binary/Duck.glb").string());
   io::GltfFile out = in;
-  auto report = pipeline::reparam(out, *engine, keep_shapes(1.0));
+  auto report = pipeline::reparam(out, *engine, keep_shapes(1.0)).to_json();
   CHECK(report["flips"] == 0);
   // Bilinear resampling at about the same density: a small, stated tolerance.
   CHECK(surface_difference(in, out, 0, 0, 0) < 0.02);
@@ -99,7 +99,7 @@ TEST_CASE("reparam on the demo asset: smaller texture, nothing flipped, valid, d
   o.cost = 0.5;
   o.triangle.evaluations = 16;
   o.triangle.view_size = 16;
-  auto report = pipeline::reparam(out, *engine, o);
+  auto report = pipeline::reparam(out, *engine, o).to_json();
   CHECK(report["flips"] == 0);
   CHECK(report["cost_ratio"].get<double>() <= 0.5 + 0.02);
   CHECK(report["textures"].size() == 1);
@@ -123,7 +123,7 @@ TEST_CASE("reparam keeps shared assets valid and leaves tiled and transformed la
     io::GltfFile out = in;
     auto o = keep_shapes(0.5);
     o.score_resolution = 512;  // validity, not quality: fixed views (the auto ones cost 4-16x)
-    auto report = pipeline::reparam(out, *engine, o);
+    auto report = pipeline::reparam(out, *engine, o).to_json();
     CHECK(report["flips"] == 0);
     auto target = dir / (path.stem().string() + ".glb");
     io::save_gltf(out, target.string());
@@ -163,7 +163,7 @@ TEST_CASE("reparam --max-gmsd: the cheapest size that meets the bound, tighter b
     o.max_gmsd = bound;
     o.triangle.evaluations = 12;
     o.triangle.view_size = 16;
-    auto report = pipeline::reparam(out, *engine, o);
+    auto report = pipeline::reparam(out, *engine, o).to_json();
     INFO(report["max_gmsd"].dump());
     CHECK(report["flips"] == 0);
     if (report["max_gmsd"]["met"].get<bool>()) CHECK(report["max_gmsd"]["q"].get<double>() <= bound);
@@ -187,7 +187,7 @@ TEST_CASE("reparam's guard writes the plain resize when the layout loses, and re
   io::GltfFile out = in, layout;
   pipeline::ReparamOptions losing = keep_shapes(0.5);
   losing.gutter = 4;
-  auto report = pipeline::reparam(out, *engine, losing, {}, &layout);
+  auto report = pipeline::reparam(out, *engine, losing, {}, &layout).to_json();
   INFO(report.dump());
   REQUIRE(report["guard"].is_object());
   const double q_reparam = report["guard"]["q_reparam"].get<double>(), q_resize = report["guard"]["q_resize"].get<double>();
@@ -208,7 +208,7 @@ TEST_CASE("reparam's guard writes the plain resize when the layout loses, and re
   pipeline::ReparamOptions forced = losing;
   forced.guard = false;
   io::GltfFile out2 = in;
-  auto report2 = pipeline::reparam(out2, *engine, forced);
+  auto report2 = pipeline::reparam(out2, *engine, forced).to_json();
   CHECK(report2["chosen"] == "reparam");
   CHECK(eval::score_as_written(in, out2, *engine, eo).q == Approx(q_reparam).epsilon(1e-9));
 }
@@ -235,7 +235,7 @@ TEST_CASE("reparam --no-optimize at cost 1: charts that fit at scale 1 keep thei
   pipeline::ReparamOptions o = keep_shapes(1.0);
   o.guard = false;  // at cost 1 the "resize" is the input itself: a tie the guard would give to it
   io::GltfFile out = in;
-  auto report = pipeline::reparam(out, *engine, o);
+  auto report = pipeline::reparam(out, *engine, o).to_json();
   INFO(report.dump());
   const auto& layout = report["layouts"][0];
   CHECK(layout["scale"].get<double>() == Approx(1.0).margin(1e-12));
@@ -263,7 +263,7 @@ TEST_CASE("reparam's gutter at the image edges follows the sampler: none where i
   o.guard = false;
   o.score_resolution = 512;
   io::GltfFile out = clamped;
-  auto r = pipeline::reparam(out, *engine, o);
+  auto r = pipeline::reparam(out, *engine, o).to_json();
   INFO(r.dump());
   const uint32_t g = r["layouts"][0]["gutter"].get<uint32_t>();
   CHECK(g >= 4);
@@ -273,7 +273,7 @@ TEST_CASE("reparam's gutter at the image edges follows the sampler: none where i
   // gutter at the edges it got scale 0.94).
   o.cost = 1.0;
   out = clamped;
-  r = pipeline::reparam(out, *engine, o);
+  r = pipeline::reparam(out, *engine, o).to_json();
   CHECK(r["layouts"][0]["scale"].get<double>() == Approx(1.0).margin(1e-12));
   CHECK(r["layouts"][0]["exact_units"] == 1);
   eval::EvalOptions eo;
@@ -285,7 +285,7 @@ TEST_CASE("reparam's gutter at the image edges follows the sampler: none where i
   io::GltfFile wrapped = clamped;
   wrapped.model.samplers[0].wrapS = TINYGLTF_TEXTURE_WRAP_REPEAT;
   out = wrapped;
-  r = pipeline::reparam(out, *engine, o);
+  r = pipeline::reparam(out, *engine, o).to_json();
   CHECK(r["layouts"][0]["edge_gutter"].dump() == "[" + std::to_string((g + 1) / 2) + ",0]");
   CHECK(r["layouts"][0]["packing_efficiency"].get<double>() < 0.99);
 }
@@ -301,7 +301,7 @@ TEST_CASE("reparam prunes what it replaced: no new UNUSED_OBJECT or error, and a
   o.guard = false;
   auto run = [&](const fs::path& from, const fs::path& to) {
     io::GltfFile f = io::load_gltf(from.string());
-    auto report = pipeline::reparam(f, *engine, o);
+    auto report = pipeline::reparam(f, *engine, o).to_json();
     CHECK(report["chosen"] == "reparam");
     io::save_gltf(f, to.string());
     return f;
@@ -346,7 +346,7 @@ TEST_CASE("reparam on the demo asset at half the texels beats the plain resize b
   pipeline::ReparamOptions o;
   o.cost = 0.5;
   o.triangle.evaluations = 40;
-  const auto report = pipeline::reparam(out, *engine, o);
+  const auto report = pipeline::reparam(out, *engine, o).to_json();
   INFO(report["candidates"].dump());
   REQUIRE(report["guard"].is_object());
   CHECK(report["chosen"] == "reparam");
@@ -354,7 +354,7 @@ TEST_CASE("reparam on the demo asset at half the texels beats the plain resize b
   eo.artifacts = false;
   eo.cost_grid = {0.5};
   const auto ev = eval::evaluate(in, {{"reparam", &out}}, *engine, eo);
-  const double floor = ev["noise_floor"].get<double>();
+  const double floor = ev.noise_floor();
   const double q_written = eval::score_as_written(in, out, *engine, eo).q;
   const double q_resize = report["guard"]["q_resize"].get<double>();
   INFO("q written " << q_written << ", resize " << q_resize << ", noise floor " << floor);
@@ -379,7 +379,7 @@ TEST_CASE("reparam on Duck at half the texels: gutters a mip level cleaner win, 
   io::GltfFile out = in;
   pipeline::ReparamOptions o;
   o.cost = 0.5;
-  const auto report = pipeline::reparam(out, *engine, o);
+  const auto report = pipeline::reparam(out, *engine, o).to_json();
   INFO(report["candidates"].dump());
   REQUIRE(report["guard"].is_object());
   const double q_default = candidate_score(report, "repack").first;
@@ -412,7 +412,7 @@ TEST_CASE("reparam on Duck: units that share texels trade density as wholes and 
   pipeline::ReparamOptions o;
   o.cost = 0.25;
   o.guard = false;
-  const auto report = pipeline::reparam(out, *engine, o);
+  const auto report = pipeline::reparam(out, *engine, o).to_json();
   INFO(report["candidates"].dump());
   const double q_repack = candidate_score(report, "repack").first;
   const auto [q_units, cost_units] = candidate_score(report, "unit-scale");
@@ -421,7 +421,7 @@ TEST_CASE("reparam on Duck: units that share texels trade density as wholes and 
   eval::EvalOptions eo;
   eo.artifacts = false;
   eo.cost_grid = {0.25};
-  const double floor = eval::evaluate(in, {}, *engine, eo)["noise_floor"].get<double>();
+  const double floor = eval::evaluate(in, {}, *engine, eo).noise_floor();
   INFO("q unit-scale " << q_units << ", repack " << q_repack << ", noise floor " << floor);
   CHECK(floor > 0);
   CHECK(q_units < q_repack - floor);

@@ -28,7 +28,7 @@ void add_bench_eval(CLI::App& bench, Globals& g) {
       o.artifacts = false;
       for (auto& b : available_backends(g)) {
         const auto t0 = std::chrono::steady_clock::now();
-        auto report = eval::evaluate(file, {}, *b.engine, o);
+        const eval::EvalResult r = eval::evaluate(file, {}, *b.engine, o);
         const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
         const auto d = b.engine->device();
         nlohmann::ordered_json line = {{"bench", "eval"},
@@ -37,18 +37,18 @@ void add_bench_eval(CLI::App& bench, Globals& g) {
                                        {"device_type", d.type},
                                        {"threads", d.threads},
                                        {"asset", *asset},
-                                       {"triangles", report["triangles"]},
-                                       {"views", report["views"]},
-                                       {"resolution", report["resolution"]},
-                                       {"filter", report["texture_filter"]},
-                                       {"shading", report["shading"]},
-                                       {"resolved_fraction", report["resolved_fraction"]},
+                                       {"triangles", r.triangles},
+                                       {"views", r.views},
+                                       {"resolution", r.resolution.resolution},
+                                       {"filter", eval::to_string(r.filter)},
+                                       {"shading", r.lit ? "lit" : "unlit"},
+                                       {"resolved_fraction", r.resolution.resolved_fraction},
                                        {"c_r_points", o.cost_grid.size()},
                                        {"seconds", s},
-                                       {"render_s", report["seconds"]["render"]},
-                                       {"gmsd_s", report["seconds"]["gmsd"]},
-                                       {"textures_s", report["seconds"]["textures"]},
-                                       {"shading_s", report["seconds"]["shading"]}};  // lit views on the host
+                                       {"render_s", r.seconds.render},
+                                       {"gmsd_s", r.seconds.gmsd},
+                                       {"textures_s", r.seconds.textures},
+                                       {"shading_s", r.seconds.shading}};  // lit views on the host
         std::printf("%s\n", line.dump().c_str());
         std::fflush(stdout);
       }

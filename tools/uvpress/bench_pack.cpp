@@ -60,8 +60,8 @@ void add_bench_pack(CLI::App& bench, Globals& g) {
           ro.cost = run.cost, ro.optimize = run.optimize, ro.guard = false;
           if (!run.optimize) ro.candidates = false, ro.least_squares_bake = false;
           io::GltfFile file = input;
-          const auto report = pipeline::reparam(file, *engine, ro);
-          for (const auto& [index, l] : report["layouts"].items()) {
+          const pipeline::ReparamResult report = pipeline::reparam(file, *engine, ro);
+          for (const auto& [index, l] : report.layouts.items()) {
             if (!l.contains("packing_efficiency")) continue;
             const double image = l["atlas"][0].get<double>() * l["atlas"][1].get<double>();
             nlohmann::ordered_json line = {{"bench", "pack"},
@@ -77,7 +77,7 @@ void add_bench_pack(CLI::App& bench, Globals& g) {
                                            {"chart_cost_ratio", l["chart_cost_ratio"]},
                                            {"units", l["packing_units"]},
                                            {"seconds", l["pack_seconds"]}};
-            if (run.optimize) line["candidate"] = report["layout"];
+            if (run.optimize) line["candidate"] = report.layout;
             std::printf("%s\n", line.dump().c_str());
             std::fflush(stdout);
           }

@@ -22,11 +22,14 @@ namespace uvpress::cli {
 
 namespace {
 
-nlohmann::ordered_json ratio_vs(const nlohmann::ordered_json& ev, const std::string& vs, std::string* why) {
-  for (const auto& s : ev["savings"])
-    if (s["layout"] == "reparam" && s["vs"] == vs) {
-      if (s["pixel_ratio_at_equal_q"].is_null()) *why += "reparam's and " + vs + "'s curves share no q range; ";
-      return s["pixel_ratio_at_equal_q"];
+nlohmann::ordered_json ratio_vs(const eval::EvalResult& ev, const std::string& vs, std::string* why) {
+  for (const auto& s : ev.savings)
+    if (s.layout == "reparam" && s.vs == vs) {
+      if (!s.savings.points) {
+        *why += "reparam's and " + vs + "'s curves share no q range; ";
+        return nullptr;
+      }
+      return s.savings.ratio;
     }
   *why += "no " + vs + " curve; ";
   return nullptr;
@@ -71,18 +74,18 @@ void add_bench_quality(CLI::App& bench, Globals& g) {
         io::GltfFile written = input, layout;
         pipeline::ReparamOptions ro = a->reparam;
         ro.curve_costs = eval::EvalOptions{}.cost_grid;  // reparam's own curve, as written
-        auto report = pipeline::reparam(written, *engine, ro, {}, &layout);
-        line["chosen"] = report["chosen"];
-        line["layout"] = report["layout"];
-        line["cost_ratio"] = report["cost_ratio"];
-        const auto& guard = report["guard"];
-        const bool compared = guard.is_object() && guard.contains("q_resize");
-        line["q_reparam"] = compared ? guard["q_reparam"] : nlohmann::ordered_json(nullptr);
-        line["q_resize"] = compared ? guard["q_resize"] : nlohmann::ordered_json(nullptr);
+        const pipeline::ReparamResult r = pipeline::reparam(written, *engine, ro, {}, &layout);
+        const nlohmann::ordered_json report = r.to_json();
+        line["chosen"] = r.chosen;
+        line["layout"] = r.layout;
+        line["cost_ratio"] = r.cost_ratio;
+        line["q_reparam"] = r.guard.ran ? nlohmann::ordered_json(r.guard.q_reparam) : nlohmann::ordered_json(nullptr);
+        line["q_resize"] = r.guard.ran ? nlohmann::ordered_json(r.guard.q_resize) : nlohmann::ordered_json(nullptr);
         // reparam's guard and curve scored with this shading (its --score-shading).
-        line["score_shading"] = report.contains("scoring") ? report["scoring"].value("shading", "") : "";
+        line["score_shading"] = r.scoring ? eval::to_string(r.scoring->shading) : "";
+        const std::vector<std::pair<double, double>> curve = r.curve ? *r.curve : std::vector<std::pair<double, double>>();
         std::string why;
-        if (report["chosen"] == "untouched") {
+        if (r.chosen == "untouched") {
           line["ratio_vs_resize"] = nullptr, line["ratio_vs_isometric"] = nullptr;
           why = "reparam left every layout untouched";
         } else {
@@ -90,18 +93,18 @@ void add_bench_quality(CLI::App& bench, Globals& g) {
           eo.resolution = a->view.resolution, eo.filter = a->view.filter, eo.shading = a->view.shading;
           eo.flatten = true;
           eo.artifacts = false;
-          auto ev = eval::evaluate(input, {{"reparam", &layout}}, *engine, eo);
+          const eval::EvalResult ev = eval::evaluate(input, {{"reparam", &layout}}, *engine, eo);
           // The ratios from reparam's own curve: its kept layout built and written at each
           // cost, scored as written, against the input's resize curve and the isometric
           // layout's curve. Beside them, eval's protocol (the layout's full texture re-baked
           // from the input at c_r 1, then resized), which charges every layout a re-bake.
           line["ratio_vs_resize"] = nullptr, line["ratio_vs_isometric"] = nullptr;
-          for (const auto& L : ev["layouts"]) {
-            const std::string name = L["name"];
+          for (const auto& L : ev.layouts) {
+            const std::string& name = L.name;
             if (name != "input" && name != "flatten") continue;
             // Levels where the two curves are within eval's noise floor count as ties (1).
-            const double floor = ev["noise_floor"].is_number() ? ev["noise_floor"].get<double>() : 0.0;
-            const auto s = eval::pixel_ratio_at_equal_q(report["curve"], L["curve"], floor);
+            const double floor = ev.noise_floor();
+            const auto s = eval::pixel_ratio_at_equal_q(curve, L.grid_q(), floor);
             const std::string key = name == "input" ? "ratio_vs_resize" : "ratio_vs_isometric";
             line[key + "_ties"] = s.ties, line["noise_floor"] = floor;
             if (s.points) line[key] = s.ratio;
@@ -109,16 +112,16 @@ void add_bench_quality(CLI::App& bench, Globals& g) {
           }
           line["ratio_vs_resize_rebaked"] = ratio_vs(ev, "input", &why);
           line["ratio_vs_isometric_rebaked"] = ratio_vs(ev, "flatten", &why);
-          line["curve"] = report["curve"];
-          line["input_resize"] = ev.value("input_resize", "");
+          line["curve"] = report.contains("curve") ? report["curve"] : nlohmann::ordered_json(nullptr);
+          line["input_resize"] = ev.input_resize;
           // Which q the ratios and q values are (auto: lit for assets with normal maps), and
           // both shadings' noise floors when lit.
-          line["shading"] = ev["shading"];
-          if (ev.contains("shading_warning")) line["shading_warning"] = ev["shading_warning"];
+          line["shading"] = ev.lit ? "lit" : "unlit";
+          if (!ev.shading_warning.empty()) line["shading_warning"] = ev.shading_warning;
         }
         if (!why.empty()) line["why_null"] = why;
         line["candidates"] = report["candidates"];
-        line["triangles"] = report["triangles_optimized"];
+        line["triangles"] = r.triangles_optimized;
         line["seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
         std::printf("%s\n", line.dump().c_str());
         std::fflush(stdout);

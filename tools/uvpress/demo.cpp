@@ -52,39 +52,39 @@ void add_demo(CLI::App& app, Globals& g) {
         else display(stage, done, total);
       };
       io::GltfFile reparamed;  // reparam's layout, even when the guard writes the resize
-      auto report = pipeline::reparam(file, *engine, options, progress, &reparamed);
+      const pipeline::ReparamResult report = pipeline::reparam(file, *engine, options, progress, &reparamed);
       io::save_gltf(file, output);
       g.stage("reparam", t0);
 
       // eval: input (its texture resized as users do) vs reparam's layout (vs the isometric
       // layout) over 20 views.
       eval::EvalArtifacts artifacts;
-      auto evaluation = eval::evaluate(original, {{"reparam", &reparamed}}, *engine, eo, &artifacts, progress);
+      const eval::EvalResult evaluation = eval::evaluate(original, {{"reparam", &reparamed}}, *engine, eo, &artifacts, progress);
       const std::string html = (fs::path(*dir) / "report").string();
       eval::write_html_report(evaluation, artifacts, html);
       g.stage("eval", t0);
 
       std::printf("demo: %s -> %s, cost ratio %.3f, %zu charts, %zu flipped triangles\n", input.c_str(), output.c_str(),
-                  report["cost_ratio"].get<double>(), report["charts"].get<size_t>(), report["flips"].get<size_t>());
-      for (const auto& s : evaluation["savings"]) {
-        if (s["pixel_ratio_at_equal_q"].is_null()) continue;  // the curves share no quality range
-        std::printf("demo: %s looks as good as %s with %.2fx its pixels (eval: layouts re-baked from the input)\n", s["layout"].get<std::string>().c_str(),
-                    s["vs"].get<std::string>().c_str(), s["pixel_ratio_at_equal_q"].get<double>());
+                  report.cost_ratio, report.charts, report.flips);
+      for (const auto& s : evaluation.savings) {
+        if (!s.savings.points) continue;  // the curves share no quality range
+        std::printf("demo: %s looks as good as %s with %.2fx its pixels (eval: layouts re-baked from the input)\n",
+                    s.layout.c_str(), s.vs.c_str(), s.savings.ratio);
       }
       // The verdict, measured on the spot: what was written and why.
-      if (report["guard"].is_object() && report["guard"].contains("q_resize")) {
-        const auto& gr = report["guard"];
+      if (report.guard.ran) {
+        const pipeline::Guard& gr = report.guard;
         std::printf("demo: wrote %s: q %.3g for reparam's layout vs %.3g for a plain Lanczos resize to the same texels\n",
-                    report["chosen"] == "reparam" ? "reparam's layout" : "the plain resize (it looks better)",
-                    gr["q_reparam"].get<double>(), gr["q_resize"].get<double>());
+                    report.chosen == "reparam" ? "reparam's layout" : "the plain resize (it looks better)",
+                    gr.q_reparam, gr.q_resize);
       }
       // Pixels at equal q: reparam's own curve (its layout written at each c_r, scored as
       // written) against the input's resize curve, both at eval's resolution.
       nlohmann::ordered_json verdict = nullptr;
       size_t verdict_ties = 0, verdict_points = 0;
-      if (report.contains("curve")) {
-        const double floor = evaluation["noise_floor"].is_number() ? evaluation["noise_floor"].get<double>() : 0.0;
-        const auto sv = eval::pixel_ratio_at_equal_q(report["curve"], evaluation["layouts"][0]["curve"], floor);
+      if (report.curve) {
+        const double floor = evaluation.noise_floor();
+        const auto sv = eval::pixel_ratio_at_equal_q(*report.curve, evaluation.layouts[0].grid_q(), floor);
         verdict_ties = sv.ties, verdict_points = sv.points;
         if (sv.points && sv.ties == sv.points) {
           verdict = sv.ratio;
@@ -101,7 +101,7 @@ void add_demo(CLI::App& app, Globals& g) {
       }
       std::printf("demo: report in %s/index.html (device: %s)\n", html.c_str(), engine->device().name.c_str());
       nlohmann::ordered_json out = {{"input", input}, {"output", output}, {"device", engine->device().name},
-                                    {"backend", engine->device().backend}, {"reparam", report}, {"eval", evaluation},
+                                    {"backend", engine->device().backend}, {"reparam", report.to_json()}, {"eval", evaluation.to_json()},
                                     {"pixels_vs_resize_at_equal_q", verdict},
                                     {"pixels_vs_resize_levels", {{"points", verdict_points}, {"ties", verdict_ties}}}};
       g.write_report(out);

@@ -149,40 +149,38 @@ void add_eval(CLI::App& app, Globals& g) {
       if (o.codec && a->codec_quality) o.codec->quality = *a->codec_quality;
       eval::EvalArtifacts art;
       ProgressDisplay display(g.verbose);
-      auto report = eval::evaluate(ref, others, *engine, o, &art, [&](const std::string& stage, size_t done, size_t total) {
-        if (stage == "done") display.finish();  // eval's last call
-        else display(stage, done, total);
-      });
+      const eval::EvalResult r = eval::evaluate(ref, others, *engine, o, &art,
+                                                [&](const std::string& stage, size_t done, size_t total) {
+                                                  if (stage == "done") display.finish();  // eval's last call
+                                                  else display(stage, done, total);
+                                                });
       display.finish();
       g.stage("evaluate", t0);
-      if (!a->html.empty()) eval::write_html_report(report, art, a->html);
-      g.write_report(report);
+      if (!a->html.empty()) eval::write_html_report(r, art, a->html);
+      g.write_report(r.to_json());
       g.stage("write", t0);
       std::string summary;
-      for (const auto& L : report["layouts"])
-        if (L.contains("as_written")) {
+      for (const auto& L : r.layouts)
+        if (L.as_written) {
           char buf[160];
-          std::snprintf(buf, sizeof buf, "; %s as written: c_r %.3f, q %.4g", L["name"].get<std::string>().c_str(),
-                        L["as_written"]["c_r"].get<double>(), L["as_written"]["q"].get<double>());
+          std::snprintf(buf, sizeof buf, "; %s as written: c_r %.3f, q %.4g", L.name.c_str(), L.as_written->c_r,
+                        L.as_written->q);
           summary += buf;
         }
-      for (const auto& s : report["savings"])
-        if (!s["pixel_ratio_at_equal_q"].is_null()) {
+      for (const auto& s : r.savings)
+        if (s.savings.points) {
           char buf[160];
-          std::snprintf(buf, sizeof buf, "; %s vs %s: %.1f%% of the pixels at equal q", s["layout"].get<std::string>().c_str(),
-                        s["vs"].get<std::string>().c_str(), 100 * s["pixel_ratio_at_equal_q"].get<double>());
+          std::snprintf(buf, sizeof buf, "; %s vs %s: %.1f%% of the pixels at equal q", s.layout.c_str(), s.vs.c_str(),
+                        100 * s.savings.ratio);
           summary += buf;
         }
-      if (report.contains("shading_warning")) summary += "; " + report["shading_warning"].get<std::string>();
+      if (!r.shading_warning.empty()) summary += "; " + r.shading_warning;
       const std::string codec = o.codec ? ", after ASTC " + io::block_name(*o.codec) + " " + io::to_string(o.codec->quality) : "";
-      std::printf("eval: %zu layouts x %zu costs (image texels; input resized %s%s), %d views at %u px (%s, %.0f%% of "
+      std::printf("eval: %zu layouts x %zu costs (image texels; input resized %s%s), %zu views at %u px (%s, %.0f%% of "
                   "the surface resolved, %s), noise floor q %.2g, in %.1f s%s\n",
-                  report["layouts"].size(), o.cost_grid.size(), report["input_resize"].get<std::string>().c_str(),
-                  codec.c_str(), report["views"].get<int>(), report["resolution"].get<unsigned>(),
-                  report["texture_filter"].get<std::string>().c_str(), 100 * report["resolved_fraction"].get<double>(),
-                  report["shading"].get<std::string>().c_str(),
-                  report["noise_floor"].is_null() ? 0.0 : report["noise_floor"].get<double>(),
-                  report["seconds"]["total"].get<double>(), summary.c_str());
+                  r.layouts.size(), o.cost_grid.size(), r.input_resize.c_str(), codec.c_str(), r.views,
+                  r.resolution.resolution, eval::to_string(r.filter), 100 * r.resolution.resolved_fraction,
+                  r.lit ? "lit" : "unlit", r.noise_floor(), r.seconds.total, summary.c_str());
       return 0;
     };
   });

@@ -298,7 +298,7 @@ nlohmann::ordered_json assign_gltf(const Globals& g, const std::string& input, c
   options.optimize = false, options.candidates = false;
   options.guard = false;  // the user asked for these UVs: scored, not replaced by a resize
   ProgressDisplay progress(g.verbose);
-  nlohmann::ordered_json r = pipeline::reparam(file, *engine, options, std::ref(progress));
+  nlohmann::ordered_json r = pipeline::reparam(file, *engine, options, std::ref(progress)).to_json();
   progress.finish();
   size_t flattened = 0, kept = 0, holes = 0, layouts = 0;
   std::set<int> tex_coords;  // the UV sets replaced

@@ -74,8 +74,9 @@ void add_reparam(CLI::App& app, Globals& g) {
       pipeline::ReparamOptions options = *o;
       options.optimize = !*no_optimize;
       ProgressDisplay progress(g.verbose);
-      auto report = pipeline::reparam(file, *engine, options, std::ref(progress));
+      const pipeline::ReparamResult r = pipeline::reparam(file, *engine, options, std::ref(progress));
       progress.finish();
+      nlohmann::ordered_json report = r.to_json();
       std::string gpu_summary;
       const auto gpu_textures = attach_gpu_textures(file, *gpu, &gpu_summary);
       if (!gpu_textures.is_null()) report["gpu_textures"] = gpu_textures;
@@ -87,44 +88,41 @@ void add_reparam(CLI::App& app, Globals& g) {
       // The whole asset before and after: JSON, buffers and images (or the .glb).
       const io::AssetBytes out_files = io::staged_asset_bytes(writer, *output);
       const uint64_t in_bytes = in_files.total(), out_bytes = out_files.total();
-      for (const auto& w : report["warnings"]) std::fprintf(stderr, "uvpress: %s: warning: %s\n", input->c_str(), w.get<std::string>().c_str());
+      for (const auto& w : r.warnings) std::fprintf(stderr, "uvpress: %s: warning: %s\n", input->c_str(), w.c_str());
       // Every image of the asset, re-baked or not.
       const nlohmann::ordered_json new_costs = pipeline::image_costs(file)["totals"];
       const uint64_t old_t = old_costs["texels"].get<uint64_t>(), new_t = new_costs["texels"].get<uint64_t>();
       // Triangles whose search never met eps keep their shape: say so on the summary line.
       std::string infeasible;
-      if (const size_t n = report["triangles_infeasible"].get<size_t>())
-        infeasible = ", " + std::to_string(n) + " of " + std::to_string(report["triangles_optimized"].get<size_t>()) +
+      if (const size_t n = r.triangles_infeasible)
+        infeasible = ", " + std::to_string(n) + " of " + std::to_string(r.triangles_optimized) +
                      " triangles infeasible at epsilon (kept at the identity)";
       // A layout packed at the source texel density could not use the whole budget: say why
       // the ratio is below --cost.
       std::string capped;
-      bool at_density = false;
-      for (const auto& l : report["layouts"]) at_density |= l.value("capped_at_source_density", false);
-      if (o->size == 0 && o->max_gmsd == 0 && at_density && report["cost_ratio"].get<double>() < 0.98 * o->cost) {
+      if (o->size == 0 && o->max_gmsd == 0 && r.capped_at_source_density() && r.cost_ratio < 0.98 * o->cost) {
         char text[96];
         std::snprintf(text, sizeof text, " (--cost %.3g: capped at the source texel density)", o->cost);
         capped = text;
       }
       // What was written, and how it compares on screen with the resize a user would do.
       std::string verdict;
-      if (report["chosen"] == "untouched") {
+      if (r.chosen == "untouched") {
         // Nothing was re-parameterized: say why instead of a cost ratio of 1 that reads as a result.
         std::string why;
-        for (const auto& l : report["layouts"])
+        for (const auto& l : r.layouts)
           if (l.is_object() && l.contains("untouched")) why += (why.empty() ? "" : "; ") + l["untouched"].get<std::string>();
         verdict = "; nothing re-parameterized" + (why.empty() ? std::string(" (no textured layout)") : ": " + why);
-      } else if (report["guard"].is_object() && report["guard"].contains("skipped")) {
+      } else if (!r.guard.skipped.empty()) {
         verdict = "; not compared with a plain resize (eval cannot score this asset)";
-      } else if (report["guard"].is_object()) {
-        const auto& gr = report["guard"];
+      } else if (r.guard.ran) {
         char text[200];
-        if (report["chosen"] == "reparam")
+        if (r.chosen == "reparam")
           std::snprintf(text, sizeof text, "; on screen q %.3g vs %.3g for a plain resize to the same texels (%s layout kept)",
-                        gr["q_reparam"].get<double>(), gr["q_resize"].get<double>(), report["layout"].get<std::string>().c_str());
+                        r.guard.q_reparam, r.guard.q_resize, r.layout.c_str());
         else
           std::snprintf(text, sizeof text, "; wrote a plain resize: it looks better (q %.3g) than reparam's layout (q %.3g)",
-                        gr["q_resize"].get<double>(), gr["q_reparam"].get<double>());
+                        r.guard.q_resize, r.guard.q_reparam);
         verdict = text;
       }
       // Texture bytes as encoded, and VRAM block-compressed (BC7/ASTC 4x4) with mip-maps,
@@ -133,8 +131,8 @@ void add_reparam(CLI::App& app, Globals& g) {
                                    human_bytes(new_costs["bytes"].get<uint64_t>()) + ", VRAM (BC7, mips) " +
                                    human_bytes(old_costs["vram_bc7_mips"].get<uint64_t>()) + " -> " +
                                    human_bytes(new_costs["vram_bc7_mips"].get<uint64_t>());
-      nlohmann::ordered_json out = {{"input", *input}, {"output", *output}, {"device", report["device"]},
-                                    {"backend", report["backend"]}, {"seconds", seconds}, {"input_bytes", in_bytes},
+      nlohmann::ordered_json out = {{"input", *input}, {"output", *output}, {"device", r.device.name},
+                                    {"backend", r.device.backend}, {"seconds", seconds}, {"input_bytes", in_bytes},
                                     {"output_bytes", out_bytes},
                                     {"input_files", {{"file", in_files.file}, {"buffers", in_files.buffers}, {"images", in_files.images}, {"ktx2", in_files.ktx2}}},
                                     {"output_files", {{"file", out_files.file}, {"buffers", out_files.buffers}, {"images", out_files.images}, {"ktx2", out_files.ktx2}}}};
@@ -146,10 +144,10 @@ void add_reparam(CLI::App& app, Globals& g) {
       writer.commit();
       std::printf("%s (%s, %llu texels) -> %s (%s, %llu texels)%s%s, cost ratio %.3f%s%s%s, %.1f s\n", input->c_str(),
                   human_bytes(in_bytes).c_str(), (unsigned long long)old_t, output->c_str(), human_bytes(out_bytes).c_str(),
-                  (unsigned long long)new_t, textures.c_str(), gpu_summary.c_str(), report["cost_ratio"].get<double>(), capped.c_str(),
+                  (unsigned long long)new_t, textures.c_str(), gpu_summary.c_str(), r.cost_ratio, capped.c_str(),
                   infeasible.c_str(), verdict.c_str(), seconds);
       if (g.verbose)
-        for (auto& [stage, s] : report["stages"].items()) std::fprintf(stderr, "%s: %.2f s\n", stage.c_str(), s.get<double>());
+        for (auto& [stage, s] : report["stages"].items()) std::fprintf(stderr, "%s: %.2f s\n", stage.c_str(), s.get<double>());  // every stage the report times
       return 0;
     };
   });
