@@ -1,83 +1,16 @@
 // `uvpress eval`: perceptual quality against pixel cost over 20 views (seed paper 001,
 // section 5.1, eq. 20-23), for several UV layouts of one asset at once.
 //
-// - Cameras: 20, at the vertices of a regular dodecahedron around the mesh's bounding
-//   sphere, looking at its centre, perspective (vertical field of view 30 degrees, the
-//   sphere just inside the frame), square images of `resolution` pixels.
-// - Resolution (auto, the default): views that resolve the reference texture. Texels per
-//   screen pixel are measured per covered pixel of the 20 views at 512 px (isotropic: the
-//   square root of a triangle's texel area over its screen area in that view); the side is
-//   the smallest multiple of 16, at least 512, at which the `resolution_percentile` (95 %)
-//   of the visible screen area is magnified or 1:1, capped at `resolution_cap` (2048: 20
-//   reference views of 2048^2 floats are 320 MiB, and every render costs 16x a 512-px
-//   one). Views wider than the engine's 1024-px limit are rendered in tiles (one camera a
-//   tile) and stitched. Report: resolution, resolution_capped, texels_per_pixel (at the
-//   percentile and the median, at the chosen side), resolved_fraction (share of the
-//   visible screen area magnified or 1:1 there). A fixed --resolution reports the same.
-//   At a side that resolves the texture, losing texels shows; at one that minifies it,
-//   each pixel takes one sample of several texels and q is mostly aliasing pattern.
-// - Renders: engine->render_mesh (CPU backend = oracle, Vulkan kernel render_mesh.comp).
-//   Texture filter (`filter`): trilinear by default, as engines sample (the texture's mip
-//   chain built as engines build it: box filter in linear light, see resize.h), so that
-//   parts of the asset seen from afar are filtered rather than aliased; bilinear samples
-//   level 0 only (the paper's renderer). Both in fp32 by hand, both backends alike.
-// - Noise floor (report: noise_floor): how far q moves when only the sampling phase
-//   does. The input resized to half its texels is scored as usual, again with the cameras
-//   and the reference views shifted by a quarter pixel (two directions), and resized to
-//   1, 2 and 3 texels more a side (the texel grid's phase; under 2 % more texels); the
-//   largest change.
-//   Differences in q below it are sampling phase, not texture, and are not claimed.
-// - Reference: the input (first file) layout with its full texture, luminance.
-// - Layouts: "input" (the reference's own UVs), with `paper_baseline` "input-rebaked" (the
-//   same UVs, re-baked like every other layout: the paper's protocol, so figures can be set
-//   beside the paper's), every other file (a glTF of the same mesh: reparam's output, an
-//   xatlas or Blender layout), and with `flatten` the isometric layout ("flatten": charts
-//   from the input's UV seams flattened by host/flatten's progressive solver, charts that
-//   are not disks keep their input UVs scaled to their 3-D area, laid out on shelves at one
-//   scale).
-// - Each layout's full texture: the input's own; for every other layout, the reference
-//   texture re-baked into its UVs (atlas::rebake) at the size where c_r = 1, when its triangles
-//   correspond one to one with the reference's (same count, same corner positions);
-//   otherwise the file's own texture.
-// - Cost: image texels, what users pay for (every texel of the image in VRAM and on the
-//   wire): c_r = W H / (W_ref H_ref), the reference's driving image. Each curve point also
-//   carries the paper's c_r_chart (eq. 20-21: W H sum|uv triangle area|, texels under the
-//   charts, relative to the reference's), which cannot see packing. For each c_r of the
-//   grid the layout's texture keeps its aspect with W H = c_r W_ref H_ref (rounded).
-// - Resize to that size: the input's texture as users' tools resize it, Lanczos-3
-//   (resize.h), in stored sRGB values and in linear light, both evaluated, the one with the
-//   lower mean log q over the grid kept (report: input_resize), so the baseline is the
-//   strongest a user gets in one line; every other layout's full texture with that same
-//   resize, so that curves differ by layout and not by filter (only "input-rebaked", the
-//   paper's protocol, keeps the exact area (box) filter, bilinear when enlarging). Then the 20 views
-//   are rendered and q = mean GMSD against the reference views (eq. 22-23). GMSD:
-//   engine->gmsd for images up to 64 x 64, else engine/cpu/gmsd.h (fp32).
-// - As written: every other file is also scored with its own texture at its real size and
-//   its own sampler (what a user would see), beside its curve (report: as_written).
-// - Savings: for a layout A against B, the ratio c_A(q) / c_B(q) of the costs at which the
-//   two curves reach the same q, log-log interpolated, geometric mean over B's curve
-//   points inside A's q range.
-// - Codec (`codec`, `--codec astc-6x6`): the textures the curves and the as-written scores
-//   sample are first compressed and decoded again, every mip level on its own (the chain
-//   built from the uncompressed level 0, then each level compressed, as a texture farm
-//   does), sRGB profile (the driving texture is a colour texture): q after the codec, so
-//   that curves compare at equal compressed bytes (with one codec, bytes go with texels;
-//   each curve point carries `codec_bytes`, its levels' blocks). The reference views and
-//   the noise floor stay uncompressed. Lit: data maps (normal, occlusion, metallic-roughness)
-//   go through astcenc's linear profile, colour maps through sRGB.
-// - Shading (`shading`, report: shading "unlit" | "lit", shading_requested, and
-//   shading_warning when auto fell back): unlit, q reads the driving texture's luminance;
-//   lit (lit.h), q reads the luminance of the views lit by a fixed rig through the asset's
-//   normal, occlusion / metallic-roughness and emissive maps, so that losing those maps'
-//   detail shows. Lit layouts are every map sharing the driving texture's UVs: at each c_r
-//   every map is resized by the same factor as the driving texture (colour maps by the
-//   input's resize, data maps by the same filter on their stored values), re-baked layouts
-//   re-bake every map (normal maps rotated into the new UV frame where tangents come from
-//   the UVs). Missing maps take glTF's defaults. auto (the default): lit when a material of
-//   the reference has a normalTexture, else unlit, so assets without normal maps keep
-//   their figures bit for bit. When lit, every curve point and as_written carries q (the
-//   lit q), q_unlit and q_lit, and the report noise_floor_unlit and noise_floor_lit beside
-//   noise_floor (the lit one); the savings and the as-written scores (reparam's guard) use q.
+// For each layout, at each relative cost c_r of a grid (image texels W H relative to the
+// reference's driving image; the paper's chart texels beside it), its texture is brought to
+// that size and the 20 views around the mesh are rendered; q = the mean GMSD of those views
+// against the reference's (the input layout with its full texture), lower is better. The
+// layouts: the input resized as users' tools do (the baseline), every other file given
+// (re-baked from the reference when its triangles are the reference's), and optionally the
+// paper's baseline and the isometric layout; each other file is also scored as written.
+// Savings compare curves at equal q. How each of these is measured (view resolution, the
+// noise floor, the resizes, codecs, lit shading) is written at the top of eval.cpp; the
+// result's fields are in result.h.
 #pragma once
 
 #include "core/image.h"
@@ -99,14 +32,14 @@
 
 namespace uvpress::eval {
 
-// How the views sample textures (see above; TextureFilter is in result.h).
+// How the views sample textures (eval.cpp, "Renders"; TextureFilter is in result.h).
 std::optional<TextureFilter> parse_texture_filter(std::string_view text);
 
 constexpr uint32_t kMaxResolution = 4096;  // views of more than 1024 px are tiled
 
 struct EvalOptions {
   std::vector<double> cost_grid = {0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0};
-  uint32_t resolution = 0;  // view images, pixels a side (8..kMaxResolution); 0: auto (see above)
+  uint32_t resolution = 0;  // view images, pixels a side (8..kMaxResolution); 0: auto (eval.cpp, "Resolution")
   uint32_t resolution_cap = 2048;       // auto: the largest side (512..kMaxResolution)
   double resolution_percentile = 0.95;  // auto: share of the visible screen area to resolve
   TextureFilter filter = TextureFilter::Trilinear;
@@ -117,8 +50,8 @@ struct EvalOptions {
   uint32_t thumbnail = 160;   // contact sheet view size, pixels
   bool artifacts = true;      // keep what write_html_report needs (contact sheets, UV plots)
   double fov_degrees = 30;
-  std::optional<io::AstcOptions> codec;  // q after ASTC compression (see above); none: uncompressed
-  Shading shading = Shading::Auto;       // which q is q (see above)
+  std::optional<io::AstcOptions> codec;  // q after ASTC compression (eval.cpp, "Codec"); none: uncompressed
+  Shading shading = Shading::Auto;       // which q is q (eval.cpp, "Shading")
 };
 
 // One layout to evaluate: a loaded glTF of the same mesh as the reference.

@@ -73,7 +73,7 @@ Image rebake_from(const LayoutMesh& reference, const LayoutMesh& target, uint32_
 Image rebake_map_from(const LayoutMesh& reference, const MaterialMap& map, const LayoutMesh& target, uint32_t width,
                       uint32_t height);
 
-// The isometric layout of `reference` (see eval.h): new UVs per vertex in [0,1] and the
+// The isometric layout of `reference` (eval.cpp, "Layouts"): new UVs per vertex in [0,1] and the
 // aspect (width / height) its texture should have. `info` gets charts, flattened charts,
 // kept charts, seconds.
 std::vector<float> isometric_uvs(const LayoutMesh& reference, double* aspect, nlohmann::ordered_json* info);
