@@ -946,54 +946,13 @@ struct Run {
   ReparamResult result;
 };
 
-// Layout li: its charts, which of them may be reshaped, and the triangle stage's targets
-// (with rate control, the equal-slope allocation and the packing units' losses).
-void prepare_layout(Run& run, size_t li) {
-  const ReparamOptions& o = run.o;
-  const io::Asset& asset = run.asset;
-  const io::GltfFile& file = run.file;
-  engine::Engine& engine = run.engine;
-  const Progress& progress = run.progress;
-  json& warnings = run.warnings;
-  std::vector<Prepared>& prepared = run.prepared;
-  double& t_triangle = run.t_triangle;
-  auto& layouts = run.layouts;
-  auto& layout_base = run.layout_base;
-  Layout& L = layouts[li];
-  json jl = {{"images", L.images}, {"driver", L.driver}};
-  json sets = json::array();
-  for (auto& s : L.uv_sets) sets.push_back({{"mesh", asset.primitives[size_t(s.primitive)].mesh},
-                                            {"primitive", asset.primitives[size_t(s.primitive)].primitive},
-                                            {"tex_coord", s.tex_coord}});
-  jl["uv_sets"] = sets;
-  if (!L.untouched.empty()) {
-    jl["untouched"] = L.untouched;
-    warnings.push_back("layout " + std::to_string(li) + " left untouched: " + L.untouched);
-    layout_base.push_back(jl);
-    return;
-  }
-  layout_base.push_back(jl);
-  prepared.emplace_back();
-  Prepared& P = prepared.back();
-  P.index = li;
-  const std::string driver_name = file.path + ": image " + std::to_string(L.driver);
-  P.driver = io::decode_image(file.image_bytes[size_t(L.driver)], driver_name);
-  const Image& driver = P.driver;
-  const double W = driver.width, H = driver.height;
-  P.W = W, P.H = H;
-  // The uniform scale a plain resize to the requested cost applies (rate control's yardstick).
-  double rate_scale = 0;
-  if (o.optimize && !o.isometric && o.rate_control && o.max_gmsd <= 0) {
-    const double c = o.size > 0 ? double(o.size) * o.size * std::min(W, H) / std::max(W, H) / (W * H) : o.cost;
-    rate_scale = std::sqrt(std::min(1.0, c));
-  }
-  std::vector<float> luminance = luminance_plane(driver);
-
-  // Charts of every UV set, with the triangle stage's targets.
+// The charts of every UV set of layout L (cut at UV seams, vertices welded by position and
+// UV), in texels of the W x H driver: each turned counter-clockwise, those of mixed
+// orientation kept rigid; then which of them share source texels.
+void find_layout_charts(const io::Asset& asset, const Layout& L, Prepared& P, double W, double H) {
   std::vector<Chart>& charts = P.charts;
   auto& welded_of_vertex = P.welded_of_vertex;
   auto& welded_count = P.welded_count;
-  auto& tri = P.tri;
   welded_of_vertex.resize(L.uv_sets.size()), welded_count.resize(L.uv_sets.size()), P.results.resize(L.uv_sets.size());
   for (size_t si = 0; si < L.uv_sets.size(); ++si) {
     const io::Primitive& prim = asset.primitives[size_t(L.uv_sets[si].primitive)];
@@ -1038,16 +997,20 @@ void prepare_layout(Run& run, size_t li) {
     }
   }
   find_shared_texels(P);
-  if (o.isometric) {
-    const std::string stage = "flatten (layout " + std::to_string(li) + ")";
-    if (progress) progress(stage, 0, 1);
-    prepare_isometric(asset, L, P, o.flatten);
-    if (progress) progress(stage, 1, 1);
-    for (const std::string& k : P.isometric.kept) warnings.push_back("layout " + std::to_string(li) + " " + k + " (input shape kept)");
-  }
+}
 
-  // Triangle stage, for the triangles of charts that may be reshaped (rigid charts and
-  // charts sharing texels keep their shape: optimizing them would be wasted work).
+// The triangle stage over the charts that may be reshaped (rigid charts and charts sharing
+// texels keep their shape: optimizing them would be wasted work). With rate control
+// (rate_scale > 0), each triangle's bound comes from its loss under the plain resize.
+void run_triangle_stage(Run& run, size_t li, const Layout& L, Prepared& P, const std::vector<float>& luminance,
+                        double rate_scale) {
+  const ReparamOptions& o = run.o;
+  const io::Asset& asset = run.asset;
+  engine::Engine& engine = run.engine;
+  const Progress& progress = run.progress;
+  const Image& driver = P.driver;
+  const std::vector<Chart>& charts = P.charts;
+  auto& tri = P.tri;
   for (size_t si = 0; si < L.uv_sets.size(); ++si) {
     const io::Primitive& prim = asset.primitives[size_t(L.uv_sets[si].primitive)];
     const std::vector<float>& uv = prim.uv_sets[size_t(L.uv_sets[si].tex_coord)].uv;
@@ -1092,12 +1055,19 @@ void prepare_layout(Run& run, size_t li) {
         tri.lambda_area.push_back(r.lambda1 * r.lambda2);
       }
       for (size_t k = 0; k < results.size(); ++k) P.results[si][which[k]] = std::move(results[k]);
-      t_triangle += t0.seconds();
+      run.t_triangle += t0.seconds();
     }
   }
+}
 
-  // The equal-slope allocation over the layout's optimized triangles (a candidate's
-  // targets): each triangle's loss at a few uniform shrinks, measured on its own views.
+// The equal-slope allocation over the layout's optimized triangles (a candidate's
+// targets): each triangle's loss at a few uniform shrinks, measured on its own views.
+void allocate_equal_slope(Run& run, const Layout& L, Prepared& P, const std::vector<float>& luminance,
+                          double rate_scale) {
+  const ReparamOptions& o = run.o;
+  const io::Asset& asset = run.asset;
+  engine::Engine& engine = run.engine;
+  const Image& driver = P.driver;
   if (o.optimize && o.candidates && rate_scale > 0 && P.tri.optimized > 0) {
     Stopwatch t0;
     perceptual::LossCurves curves;
@@ -1136,14 +1106,66 @@ void prepare_layout(Run& run, size_t li) {
                             {"spent", alloc.spent},
                             {"multiplier", alloc.multiplier},
                             {"scale_quartiles", {quantile(alloc.scale, 0.25), quantile(alloc.scale, 0.5), quantile(alloc.scale, 0.75)}}};
-    t_triangle += t0.seconds();
+    run.t_triangle += t0.seconds();
   }
+}
+
+// Layout li: its charts, which of them may be reshaped, and the triangle stage's targets
+// (with rate control, the equal-slope allocation and the packing units' losses).
+void prepare_layout(Run& run, size_t li) {
+  const ReparamOptions& o = run.o;
+  const io::Asset& asset = run.asset;
+  const io::GltfFile& file = run.file;
+  const Progress& progress = run.progress;
+  json& warnings = run.warnings;
+  auto& layout_base = run.layout_base;
+  const Layout& L = run.layouts[li];
+  json jl = {{"images", L.images}, {"driver", L.driver}};
+  json sets = json::array();
+  for (auto& s : L.uv_sets) sets.push_back({{"mesh", asset.primitives[size_t(s.primitive)].mesh},
+                                            {"primitive", asset.primitives[size_t(s.primitive)].primitive},
+                                            {"tex_coord", s.tex_coord}});
+  jl["uv_sets"] = sets;
+  if (!L.untouched.empty()) {
+    jl["untouched"] = L.untouched;
+    warnings.push_back("layout " + std::to_string(li) + " left untouched: " + L.untouched);
+    layout_base.push_back(jl);
+    return;
+  }
+  layout_base.push_back(jl);
+  run.prepared.emplace_back();
+  Prepared& P = run.prepared.back();
+  P.index = li;
+  const std::string driver_name = file.path + ": image " + std::to_string(L.driver);
+  P.driver = io::decode_image(file.image_bytes[size_t(L.driver)], driver_name);
+  const Image& driver = P.driver;
+  const double W = driver.width, H = driver.height;
+  P.W = W, P.H = H;
+  // The uniform scale a plain resize to the requested cost applies (rate control's yardstick).
+  double rate_scale = 0;
+  if (o.optimize && !o.isometric && o.rate_control && o.max_gmsd <= 0) {
+    const double c = o.size > 0 ? double(o.size) * o.size * std::min(W, H) / std::max(W, H) / (W * H) : o.cost;
+    rate_scale = std::sqrt(std::min(1.0, c));
+  }
+  std::vector<float> luminance = luminance_plane(driver);
+
+  find_layout_charts(asset, L, P, W, H);
+  if (o.isometric) {
+    const std::string stage = "flatten (layout " + std::to_string(li) + ")";
+    if (progress) progress(stage, 0, 1);
+    prepare_isometric(asset, L, P, o.flatten);
+    if (progress) progress(stage, 1, 1);
+    for (const std::string& k : P.isometric.kept) warnings.push_back("layout " + std::to_string(li) + " " + k + " (input shape kept)");
+  }
+
+  run_triangle_stage(run, li, L, P, luminance, rate_scale);
+  allocate_equal_slope(run, L, P, luminance, rate_scale);
   // Uniform scales per packing unit (the `unit-scale` candidate).
   if (o.optimize && o.candidates && rate_scale > 0) {
     Stopwatch t0;
-    measure_unit_losses(asset, L, P, engine, luminance, o.triangle);
+    measure_unit_losses(asset, L, P, run.engine, luminance, o.triangle);
     P.unit_cost = rate_scale * rate_scale;
-    t_triangle += t0.seconds();
+    run.t_triangle += t0.seconds();
   }
   run.optimized += P.tri.optimized, run.infeasible += P.tri.optimized - P.tri.feasible;
 }
