@@ -204,10 +204,10 @@ void check_rebake_texels(const RebakeTexelsDesc& desc);
 // the geometry both the host's owner search and the CPU kernel use.
 double rebake_closest_point(const RebakeTriangle& t, double px, double py, double& qx, double& qy);
 
-// The CPU kernel (the oracle, double precision, deterministic for any thread count):
-// writes `channels` floats for every owned texel of `texels` (width * height * channels),
-// leaves the others untouched. threads 0 = hardware concurrency.
-void rebake_texels_cpu(const RebakeTexelsDesc& desc, float* texels, unsigned threads = 0);
+// Engine::rebake_texels on the CPU (the oracle, double precision): checks `desc`, then
+// rebake_filter_box for every owned texel, tiles handed out to `threads` (>= 1) threads;
+// every texel depends on its own footprint only, so the bits do not depend on `threads`.
+void rebake_texels_cpu(const RebakeTexelsDesc& desc, float* texels, unsigned threads);
 
 // Texel index i wrapped into [0, n) by a glTF wrap mode (anything unknown as REPEAT).
 int rebake_wrap(int i, int n, int mode);
@@ -247,9 +247,12 @@ class Engine {
   // (engine/cpu/render_mesh.cpp); the Vulkan backend runs render_mesh.comp.
   virtual MeshRenders render_mesh(const MeshRenderDesc& desc);
 
-  // Re-bake sampling (see RebakeTexelsDesc): writes every owned texel of `texels`. The
-  // default is rebake_texels_cpu; the Vulkan backend runs rebake.comp (fp32, local frames).
-  virtual void rebake_texels(const RebakeTexelsDesc& desc, float* texels);
+  // Re-bake sampling (see RebakeTexelsDesc): writes `channels` floats for every owned texel
+  // of `texels` (width * height * channels), leaves the others untouched. The CPU backend
+  // is the oracle (rebake_filter_box per texel, double precision, on its threads; the bits
+  // do not depend on their count); the Vulkan backend runs rebake.comp (fp32, local
+  // frames). Throws EngineError for a description that breaks the rules there.
+  virtual void rebake_texels(const RebakeTexelsDesc& desc, float* texels) = 0;
 
   // Validation-layer errors seen so far (always 0 on the CPU backend).
   virtual uint64_t validation_errors() const { return 0; }

@@ -121,6 +121,8 @@ class CpuEngine final : public Engine {
     });
   }
 
+  void rebake_texels(const RebakeTexelsDesc& desc, float* texels) override { rebake_texels_cpu(desc, texels, threads_); }
+
  private:
   unsigned threads_;
 };
