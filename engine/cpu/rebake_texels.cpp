@@ -1,7 +1,7 @@
 // Re-bake sampling on the CPU: the oracle for rebake.comp and the CPU backend's
 // Engine::rebake_texels. Double precision throughout; every texel depends only on the
 // description, never on which thread ran it, so results are identical for any thread count.
-#include "engine.h"
+#include "backend.h"
 
 #include <algorithm>
 #include <atomic>
