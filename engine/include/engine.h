@@ -1,5 +1,7 @@
 // uvpress compute engine: the one interface behind which the Vulkan and the native CPU
 // backends live. It knows images, views and triangles; nothing about meshes or glTF.
+// This header (and shaders/layout.h, whose structs it uses) is all the host may include:
+// the rest of engine/ is the backends' own (a private include path of uvpress_engine).
 #pragma once
 
 #include "layout.h"
