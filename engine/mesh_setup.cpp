@@ -1,6 +1,8 @@
 // Triangle set-up and binning of whole-mesh views (see mesh_render.h), shared by backends.
 #include "mesh_render.h"
 
+#include "backend.h"
+
 #include <algorithm>
 #include <array>
 #include <cmath>

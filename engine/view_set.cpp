@@ -1,5 +1,5 @@
 // The limits on a view set that every backend shares (shaders/layout.h).
-#include "engine.h"
+#include "backend.h"
 
 #include <cmath>
 #include <string>

@@ -3,10 +3,12 @@
 # breaks them and fails. Run by CTest as `layers`.
 #
 # An include is resolved as the compiler resolves a quoted include: next to the including
-# file first, then under host/, engine/ and shaders/ (the public include directories). What
-# resolves to none of them is a library header and is not checked.
+# file first, then under host/, engine/include/ and shaders/ (the public include
+# directories), then engine/ (the backends' private one: a host include found only there
+# does not compile, and is reported here by name). What resolves to none of them is a
+# library header and is not checked.
 #  - host/<stage>/ may include its own stage and the stages listed for it below;
-#    "engine" means the engine interface, engine/engine.h, and nothing else of engine/.
+#    "engine" means the engine interface, engine/include/engine.h, and nothing else of engine/.
 #  - engine/ never includes host/.
 cmake_minimum_required(VERSION 3.20)
 if(NOT ROOT)
@@ -48,7 +50,7 @@ foreach(rel IN LISTS sources)
     if(EXISTS "${dir}/${inc}")
       file(RELATIVE_PATH target "${ROOT}" "${dir}/${inc}")
     else()
-      foreach(base host engine shaders)
+      foreach(base host engine/include shaders engine)
         if(EXISTS "${ROOT}/${base}/${inc}")
           set(target "${base}/${inc}")
           break()
@@ -75,10 +77,10 @@ foreach(rel IN LISTS sources)
       string(REPLACE ";" ", " may "${allowed_${stage}}")
       list(APPEND violations "${rel}: includes ${target} (host/${stage} may depend on: ${may})")
     elseif(ttop STREQUAL "engine")
-      if(target STREQUAL "engine/engine.h" AND "engine" IN_LIST allowed_${stage})
+      if(target STREQUAL "engine/include/engine.h" AND "engine" IN_LIST allowed_${stage})
         continue()
       endif()
-      list(APPEND violations "${rel}: includes ${target} (host/${stage} may use only the engine interface, engine/engine.h, and only where DESIGN.md allows it)")
+      list(APPEND violations "${rel}: includes ${target} (host/${stage} may use only the engine interface, engine/include/engine.h, and only where DESIGN.md allows it)")
     elseif(ttop STREQUAL "shaders")
       list(APPEND violations "${rel}: includes ${target} (shaders/ are the engine's; the host reaches them through engine.h)")
     endif()

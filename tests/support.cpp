@@ -101,6 +101,11 @@ nlohmann::json validate_gltf(const fs::path& file) {
   return nlohmann::json::parse(r.out);
 }
 
+engine::Engine& cpu_engine() {
+  static const std::unique_ptr<engine::Engine> cpu = engine::make_cpu_engine({});
+  return *cpu;
+}
+
 std::unique_ptr<engine::Engine> lavapipe(uint64_t max_buffer_bytes) {
   engine::EngineOptions o;
   o.validation = true;

@@ -1,5 +1,5 @@
 // Test helpers: where the shared assets are, running the uvpress binary and the Khronos
-// validator as a user would, scratch folders, and the Vulkan engine on lavapipe.
+// validator as a user would, scratch folders, and the CPU engine and the Vulkan one on lavapipe.
 #pragma once
 
 #include "engine.h"
@@ -52,6 +52,10 @@ void check_input_error(const Scratch& dir, const std::string& args, const fs::pa
 
 // The Khronos validator's summary of a .gltf/.glb: {"numErrors", "errors": {code: n}}.
 nlohmann::json validate_gltf(const fs::path& file);
+
+// The native CPU engine (default options), made once and shared: what tests re-bake on
+// unless they compare engines.
+engine::Engine& cpu_engine();
 
 // Vulkan on lavapipe with the validation layer on; max_buffer_bytes 0 keeps the engine's
 // default. Throws engine::EngineError when this machine has no lavapipe.

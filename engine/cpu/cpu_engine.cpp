@@ -1,7 +1,7 @@
 // The native CPU backend: every kernel with the same semantics as its GLSL twin (same
 // formulas, same summation order, fp32), parallel over images. It is the oracle the Vulkan
 // path is tested against and the fast path on machines without a GPU.
-#include "engine.h"
+#include "backend.h"
 #include "gmsd.h"
 #include "parallel_for.h"
 #include "views.h"
@@ -120,6 +120,8 @@ class CpuEngine final : public Engine {
                                 lattice ? lattice + k : nullptr);
     });
   }
+
+  void rebake_texels(const RebakeTexelsDesc& desc, float* texels) override { rebake_texels_cpu(desc, texels, threads_); }
 
  private:
   unsigned threads_;

@@ -1,7 +1,7 @@
-// Re-bake sampling on the CPU: the oracle for rebake.comp and the path host/atlas/rebake.cpp
-// takes without an engine. Double precision throughout; every texel depends only on the
+// Re-bake sampling on the CPU: the oracle for rebake.comp and the CPU backend's
+// Engine::rebake_texels. Double precision throughout; every texel depends only on the
 // description, never on which thread ran it, so results are identical for any thread count.
-#include "engine.h"
+#include "backend.h"
 
 #include <algorithm>
 #include <atomic>
@@ -171,8 +171,7 @@ void rebake_texels_cpu(const RebakeTexelsDesc& d, float* texels, unsigned thread
   };
 
   const int tiles = tx * ty;
-  unsigned n = threads ? threads : std::max(1u, std::thread::hardware_concurrency());
-  n = std::max(1u, std::min<unsigned>(n, unsigned(tiles)));
+  const unsigned n = std::max(1u, std::min<unsigned>(threads, unsigned(tiles)));
   std::atomic<int> next{0};
   auto work = [&] {
     for (int tile; (tile = next.fetch_add(1)) < tiles;) run_tile(tile);
@@ -182,7 +181,5 @@ void rebake_texels_cpu(const RebakeTexelsDesc& d, float* texels, unsigned thread
   work();
   for (auto& th : pool) th.join();
 }
-
-void Engine::rebake_texels(const RebakeTexelsDesc& desc, float* texels) { rebake_texels_cpu(desc, texels, 0); }
 
 }  // namespace uvpress::engine

@@ -2,6 +2,8 @@
 // rasterization, same fp32 operations in the same order per pixel) and the Engine default.
 #include "mesh_render.h"
 
+#include "backend.h"
+
 #include <algorithm>
 #include <cmath>
 #include <thread>

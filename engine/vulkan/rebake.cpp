@@ -1,5 +1,6 @@
 #include "rebaker.h"
 
+#include "backend.h"
 #include "rebake.spv.h"
 
 #include <algorithm>

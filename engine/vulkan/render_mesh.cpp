@@ -1,5 +1,6 @@
 #include "mesh_renderer.h"
 
+#include "backend.h"
 #include "layout.h"
 #include "mesh_render.h"
 #include "render_mesh.spv.h"

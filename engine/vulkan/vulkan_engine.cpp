@@ -1,6 +1,7 @@
 // The Vulkan backend of the Engine interface: kernels created once, buffers kept and
 // reused across calls, batches chunked to the device's buffer limit, every chunk one
 // command buffer with many dispatches and one fence.
+#include "backend.h"
 #include "compute.h"
 #include "layout.h"
 

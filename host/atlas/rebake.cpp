@@ -3,8 +3,6 @@
 #include "atlas/pack.h"
 #include "core/stopwatch.h"
 
-#include <omp.h>
-
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -252,7 +250,7 @@ engine::RebakeTexelsDesc RebakePlan::desc(const RebakeOptions& opt) const {
 }
 
 Image rebake(const Image& source, const std::vector<RebakeMesh>& meshes, const RebakeOptions& opt,
-             RebakeStats* stats, engine::Engine* engine) {
+             engine::Engine& engine, RebakeStats* stats) {
   const RebakePlan plan = plan_rebake(source, meshes, opt);
   const int W = plan.width, H = plan.height, C = plan.channels;
   const bool has_alpha = plan.has_alpha;
@@ -265,15 +263,11 @@ Image rebake(const Image& source, const std::vector<RebakeMesh>& meshes, const R
   const auto& list = plan.tile_list;
   const auto& owner = plan.owner;
 
-  // The footprints, filtered on the engine (or the CPU kernel): straight colour, linear.
+  // The footprints, filtered on the engine: straight colour, linear.
   const engine::RebakeTexelsDesc desc = plan.desc(opt);
   std::vector<float> filtered(size_t(W) * H * C, 0.0f);
   const Stopwatch t_sample;
-  if (engine) {
-    engine->rebake_texels(desc, filtered.data());
-  } else {
-    engine::rebake_texels_cpu(desc, filtered.data(), unsigned(std::max(1, omp_get_max_threads())));
-  }
+  engine.rebake_texels(desc, filtered.data());
   const double sample_seconds = t_sample.seconds();
 
   Image out;

@@ -1,4 +1,4 @@
-// Re-baking a texture into new UVs (deterministic; sampling on an engine or the CPU kernel).
+// Re-baking a texture into new UVs (deterministic; the per-texel sampling on an engine).
 //
 // For every texel of the new image, the triangle that owns it is found among the new-UV
 // triangles that overlap the texel's square (conservative rasterization): the one whose
@@ -85,19 +85,19 @@ struct RebakeStats {
   size_t covered = 0;            // texels owned by a triangle
   size_t triangles = 0;          // non-degenerate triangles rasterized
   std::vector<uint8_t> coverage; // width * height, 1 = covered (row 0 on top)
-  double sample_seconds = 0;     // time in the per-texel sampling (engine or CPU kernel)
+  double sample_seconds = 0;     // time in the per-texel sampling (on the engine)
 };
 
 // Same channel count and bit depth as `source`. Throws std::invalid_argument for an empty
 // source or zero size.
 //
 // The host sets up and bins the triangles, picks owners, converts colour, rotates normals
-// and fills gutters; the per-texel sampling runs on `engine` (engine::Engine::rebake_texels)
-// when one is given, else on the CPU kernel (engine::rebake_texels_cpu, the oracle). Both
-// give the same coverage; texels agree to fp32 rounding (the Vulkan kernel works in fp32 in
+// and fills gutters; the per-texel sampling runs on `engine` (engine::Engine::rebake_texels;
+// a CPU engine, engine::make_cpu_engine, runs the double-precision oracle). Every engine
+// gives the same coverage; texels agree to fp32 rounding (the Vulkan kernel works in fp32 in
 // per-tile frames: see tests/atlas/test_rebake_engine.cpp for the stated tolerances).
 Image rebake(const Image& source, const std::vector<RebakeMesh>& meshes, const RebakeOptions& options,
-             RebakeStats* stats = nullptr, engine::Engine* engine = nullptr);
+             engine::Engine& engine, RebakeStats* stats = nullptr);
 
 // sRGB transfer functions (IEC 61966-2-1), exposed for tests and callers.
 float srgb_to_linear(float v);

@@ -10,6 +10,8 @@
 #include "io/image_io.h"
 #include "io/vertex_attribute.h"
 
+#include <omp.h>
+
 #include <algorithm>
 #include <cmath>
 #include <map>
@@ -231,7 +233,11 @@ Image rebake_image(const LayoutMesh& ref, const Image& source, const LayoutMesh&
   o.width = W, o.height = H;
   o.role = role;
   o.wrap_s = o.wrap_t = ref.repeat ? atlas::kWrapRepeat : atlas::kWrapClampToEdge;
-  return atlas::rebake(source, {mesh}, o);
+  // On a CPU engine (the double-precision oracle) whatever device eval renders on, so a
+  // report does not depend on the device; on OpenMP's threads, as eval's own loops.
+  engine::EngineOptions eo;
+  eo.threads = unsigned(std::max(1, omp_get_max_threads()));
+  return atlas::rebake(source, {mesh}, o, *engine::make_cpu_engine(eo));
 }
 
 }  // namespace

@@ -824,7 +824,7 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
                           ro.role != atlas::RebakeRole::Normal;
       const bool all_copied = copies && std::find(unit_exact.begin(), unit_exact.end(), 0) == unit_exact.end();
       atlas::RebakeStats coverage;
-      Image baked = atlas::rebake(source, meshes, ro, &coverage, &engine);
+      Image baked = atlas::rebake(source, meshes, ro, engine, &coverage);
       // The least-squares bake starts from the Lanczos one and keeps its surround (the
       // solve itself only reaches one texel past each chart).
       if (!all_copied) baked = atlas::rebake_lanczos(source, meshes, ro, baked, &coverage.coverage);

@@ -2,6 +2,7 @@
 
 #include "atlas/gutter_fill.h"
 #include "atlas/rebake.h"
+#include "support.h"
 
 #include <cmath>
 #include <cstdint>
@@ -76,7 +77,7 @@ TEST_CASE("gutter fill: each chart's colour reaches every mip level down to the 
   atlas::RebakeOptions o;
   o.width = 64, o.height = 32;
   atlas::RebakeStats stats;
-  const Image baked = atlas::rebake(src, meshes, o, &stats);
+  const Image baked = atlas::rebake(src, meshes, o, test::cpu_engine(), &stats);
   const std::vector<uint8_t>& cov = stats.coverage;
   // The layout: footprints at texels 2..20 and 29..61, so 8 empty texels between them.
   REQUIRE(cov[10 * 64 + 20] == 1);
@@ -103,7 +104,7 @@ TEST_CASE("gutter fill: each chart's colour reaches every mip level down to the 
   // level-3 block 24..31 holds green's edge and red's share of the gutter (24).
   atlas::RebakeOptions bare = o;
   bare.fill_gutter = false;
-  Image nearest = atlas::rebake(src, meshes, bare);
+  Image nearest = atlas::rebake(src, meshes, bare, test::cpu_engine());
   atlas::fill_gutter(nearest, cov, true, 1000);
   CHECK(leaks(nearest, cov, split, 2) == 0);
   CHECK(leaks(nearest, cov, split, 3) > 0);

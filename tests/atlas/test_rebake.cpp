@@ -1,6 +1,7 @@
 #include <catch2/catch.hpp>
 
 #include "atlas/rebake.h"
+#include "support.h"
 
 #include <omp.h>
 
@@ -71,7 +72,7 @@ TEST_CASE("rebake: identity reproduces the source, alpha kept", "[atlas]") {
     RebakeOptions o;
     o.width = 64, o.height = 48, o.role = role;
     atlas::RebakeStats stats;
-    const Image out = atlas::rebake(src, {q.mesh()}, o, &stats);
+    const Image out = atlas::rebake(src, {q.mesh()}, o, test::cpu_engine(), &stats);
     REQUIRE(out.width == 64);
     REQUIRE(out.channels == 4);
     CHECK(out.bits == src.bits);
@@ -97,7 +98,7 @@ TEST_CASE("rebake: a translated or quarter-turned chart moves its pixels", "[atl
     Quad q;
     q.old_uv = rect_uv(4, 4, 20, 20, 32, 32);
     q.new_uv = rect_uv(13, 9, 29, 25, 32, 32);
-    const Image out = atlas::rebake(src, {q.mesh()}, o);
+    const Image out = atlas::rebake(src, {q.mesh()}, o, test::cpu_engine());
     float worst = 0;
     for (int j = 4; j < 20; ++j)
       for (int i = 4; i < 20; ++i)
@@ -109,7 +110,7 @@ TEST_CASE("rebake: a translated or quarter-turned chart moves its pixels", "[atl
     Quad q;
     q.old_uv = rect_uv(4, 4, 20, 20, 32, 32);
     q.new_uv = rotated_uv(4, 4, 20, 20, 28, 8, 32, 32);
-    const Image out = atlas::rebake(src, {q.mesh()}, o);
+    const Image out = atlas::rebake(src, {q.mesh()}, o, test::cpu_engine());
     float worst = 0;
     for (int j = 4; j < 20; ++j)
       for (int i = 4; i < 20; ++i)
@@ -131,9 +132,9 @@ TEST_CASE("rebake: 2x and 4x downscale of a fine checker is the mean, not aliasi
     RebakeOptions o;
     o.width = o.height = size;
     o.role = RebakeRole::Data;
-    const Image grey = atlas::rebake(src, {q.mesh()}, o);
+    const Image grey = atlas::rebake(src, {q.mesh()}, o, test::cpu_engine());
     o.role = RebakeRole::Color;  // averaged in linear light, stored sRGB-encoded
-    const Image colour = atlas::rebake(src, {q.mesh()}, o);
+    const Image colour = atlas::rebake(src, {q.mesh()}, o, test::cpu_engine());
     float worst_data = 0, worst_colour = 0;
     const float srgb_half = atlas::linear_to_srgb(0.5f);
     for (size_t i = 0; i < grey.pixels.size(); ++i) {
@@ -167,7 +168,7 @@ TEST_CASE("rebake: gutters take the nearest chart's colour, never the background
   RebakeOptions o;
   o.width = 32, o.height = 24;
   atlas::RebakeStats stats;
-  const Image out = atlas::rebake(src, {a.mesh(), b.mesh()}, o, &stats);
+  const Image out = atlas::rebake(src, {a.mesh(), b.mesh()}, o, test::cpu_engine(), &stats);
   CHECK(stats.covered == size_t(9 * 9 + 9 * 9));  // conservative: partly covered texels count
   auto is = [&](int x, int y, float r, float g) {
     return std::abs(out.at(x, y, 0) - r) < 1e-5f && std::abs(out.at(x, y, 1) - g) < 1e-5f &&
@@ -209,7 +210,7 @@ TEST_CASE("rebake: a normal map under a quarter turn has its xy rotated", "[atla
     Quad q;
     q.old_uv = rect_uv(4, 4, 20, 20, 32, 32);
     q.new_uv = rect_uv(10, 10, 26, 26, 32, 32);
-    const Image out = atlas::rebake(src, {q.mesh()}, o);
+    const Image out = atlas::rebake(src, {q.mesh()}, o, test::cpu_engine());
     CHECK(out.at(15, 15, 0) == Approx(0.8f).margin(1e-5));
     CHECK(out.at(15, 15, 1) == Approx(0.5f).margin(1e-5));
     CHECK(out.at(15, 15, 2) == Approx(0.9f).margin(1e-5));
@@ -218,7 +219,7 @@ TEST_CASE("rebake: a normal map under a quarter turn has its xy rotated", "[atla
     Quad q;
     q.old_uv = rect_uv(4, 4, 20, 20, 32, 32);
     q.new_uv = rotated_uv(4, 4, 20, 20, 28, 8, 32, 32);
-    const Image out = atlas::rebake(src, {q.mesh()}, o);
+    const Image out = atlas::rebake(src, {q.mesh()}, o, test::cpu_engine());
     for (auto [x, y] : {std::pair{15, 18}, std::pair{9, 13}, std::pair{26, 26}}) {
       CHECK(out.at(x, y, 0) == Approx(stored(0.0)).margin(1e-5));
       CHECK(out.at(x, y, 1) == Approx(stored(-0.6)).margin(1e-5));
@@ -234,7 +235,7 @@ TEST_CASE("rebake: a normal map under a quarter turn has its xy rotated", "[atla
       q.new_uv.push_back(float((0.5 * p[1] + 4) / 32));
       q.new_uv.push_back(float((-0.5 * p[0] + 14) / 32));
     }
-    const Image out = atlas::rebake(src, {q.mesh()}, o);
+    const Image out = atlas::rebake(src, {q.mesh()}, o, test::cpu_engine());
     CHECK(out.at(10, 8, 0) == Approx(stored(0.0)).margin(1e-5));
     CHECK(out.at(10, 8, 1) == Approx(stored(0.6)).margin(1e-5));
     CHECK(out.at(10, 8, 2) == Approx(stored(0.8)).margin(1e-5));
@@ -258,7 +259,7 @@ TEST_CASE("rebake: transparent texels do not tint (premultiplied), alpha is aver
   q.old_uv = q.new_uv = rect_uv(0, 0, 1, 1, 1, 1);
   RebakeOptions o;
   o.width = o.height = 8;
-  const Image out = atlas::rebake(src, {q.mesh()}, o);
+  const Image out = atlas::rebake(src, {q.mesh()}, o, test::cpu_engine());
   CHECK(out.at(3, 3, 0) == Approx(1.0f).margin(1e-5));
   CHECK(out.at(3, 3, 2) == Approx(0.0f).margin(1e-5));
   CHECK(out.at(3, 3, 3) == Approx(0.5f).margin(1e-5));
@@ -285,9 +286,9 @@ TEST_CASE("rebake: same result on 1 and 2 threads", "[atlas]") {
   o.width = 40, o.height = 40;
   const int threads = omp_get_max_threads();
   omp_set_num_threads(1);
-  const Image a = atlas::rebake(src, {m}, o);
+  const Image a = atlas::rebake(src, {m}, o, test::cpu_engine());
   omp_set_num_threads(2);
-  const Image b = atlas::rebake(src, {m}, o);
+  const Image b = atlas::rebake(src, {m}, o, test::cpu_engine());
   omp_set_num_threads(threads);
   CHECK(a.pixels == b.pixels);
 }
@@ -314,7 +315,7 @@ TEST_CASE("rebake: 2048^2 RGBA timing", "[.][bench][rebake-bench]") {
   for (RebakeRole role : {RebakeRole::Color, RebakeRole::Data}) {
     o.role = role;
     const auto t0 = std::chrono::steady_clock::now();
-    const Image out = atlas::rebake(src, {m}, o);
+    const Image out = atlas::rebake(src, {m}, o, test::cpu_engine());
     const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     WARN("rebake 2048^2 RGBA " << (role == RebakeRole::Color ? "colour" : "data") << ": " << s << " s on "
                                << omp_get_max_threads() << " threads");
@@ -323,7 +324,7 @@ TEST_CASE("rebake: 2048^2 RGBA timing", "[.][bench][rebake-bench]") {
   o.width = o.height = 1024;  // 2x downscale: 4 samples per texel
   o.role = RebakeRole::Color;
   const auto t0 = std::chrono::steady_clock::now();
-  atlas::rebake(src, {m}, o);
+  atlas::rebake(src, {m}, o, test::cpu_engine());
   WARN("rebake 2048^2 -> 1024^2 colour: "
        << std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() << " s");
 }

@@ -4,6 +4,7 @@
 #include "atlas/dark_chart_on_white.h"
 #include "atlas/rebake_lanczos.h"
 #include "eval/resize.h"
+#include "support.h"
 
 #include <omp.h>
 
@@ -43,7 +44,7 @@ TEST_CASE("rebake_lanczos: a uniform half-size layout is the Lanczos-3 resize", 
   atlas::RebakeOptions o;
   o.width = 32, o.height = 24;
   o.role = atlas::RebakeRole::Color;
-  const Image area = atlas::rebake(src, {q.mesh()}, o);
+  const Image area = atlas::rebake(src, {q.mesh()}, o, test::cpu_engine());
   const Image lz = atlas::rebake_lanczos(src, {q.mesh()}, o, area);
   // The independent reference: OpenImageIO's lanczos3 resize in stored values.
   const Image ref = eval::resize_lanczos3(src, 32, 24, false);
@@ -65,13 +66,14 @@ TEST_CASE("rebake_lanczos: identity and quarter turns at the same size copy texe
   o.width = 32, o.height = 32;
   o.role = atlas::RebakeRole::Data;
   Quad q;
-  const Image same = atlas::rebake_lanczos(src, {q.mesh()}, o, atlas::rebake(src, {q.mesh()}, o));
+  const Image same = atlas::rebake_lanczos(src, {q.mesh()}, o, atlas::rebake(src, {q.mesh()}, o, test::cpu_engine()));
   size_t changed = 0;
   for (size_t i = 0; i < src.pixels.size(); ++i) changed += std::abs(same.pixels[i] - src.pixels[i]) > 1e-6f;
   CHECK(changed == 0);
   // A quarter turn: new (u, v) = (1 - v_old, u_old) for the corners.
   q.new_uv = {1, 0, 1, 1, 0, 1, 0, 0};
-  const Image turned = atlas::rebake_lanczos(src, {q.mesh()}, o, atlas::rebake(src, {q.mesh()}, o));
+  const Image turned =
+      atlas::rebake_lanczos(src, {q.mesh()}, o, atlas::rebake(src, {q.mesh()}, o, test::cpu_engine()));
   size_t mismatched = 0;
   for (uint32_t y = 0; y < 32; ++y)
     for (uint32_t x = 0; x < 32; ++x)
@@ -82,7 +84,7 @@ TEST_CASE("rebake_lanczos: identity and quarter turns at the same size copy texe
   omp_set_num_threads(1);
   q.new_uv = {0.1f, 0.05f, 0.8f, 0.1f, 0.9f, 0.7f, 0.05f, 0.9f};
   o.width = 20, o.height = 20;
-  const Image area = atlas::rebake(src, {q.mesh()}, o);
+  const Image area = atlas::rebake(src, {q.mesh()}, o, test::cpu_engine());
   const Image a = atlas::rebake_lanczos(src, {q.mesh()}, o, area);
   omp_set_num_threads(2);
   const Image b = atlas::rebake_lanczos(src, {q.mesh()}, o, area);
@@ -102,7 +104,7 @@ TEST_CASE("rebake_lanczos: surround bakes what the source has around a chart int
   atlas::RebakeOptions o;
   o.width = o.height = 64;
   o.role = atlas::RebakeRole::Data;
-  const Image area = atlas::rebake(src, {mesh}, o);
+  const Image area = atlas::rebake(src, {mesh}, o, test::cpu_engine());
   const Image plain = atlas::rebake_lanczos(src, {mesh}, o, area);
   o.surround = 4;
   std::vector<uint8_t> baked;

@@ -9,6 +9,7 @@
 #include "atlas/rebake_lanczos.h"
 #include "atlas/rebake_lsq.h"
 #include "core/image.h"
+#include "support.h"
 
 #include <omp.h>
 
@@ -132,7 +133,7 @@ struct Bakes {
 
 Bakes bake_both(const Image& src, const Layout& L, const RebakeOptions& o, const atlas::LsqBakeOptions& lsq = {}) {
   Bakes b;
-  b.area = atlas::rebake(src, {L.mesh()}, o);
+  b.area = atlas::rebake(src, {L.mesh()}, o, test::cpu_engine());
   b.lsq = atlas::rebake_least_squares(src, {L.mesh()}, o, b.area, &b.stats, lsq);
   return b;
 }
@@ -243,7 +244,7 @@ TEST_CASE("rebake_lsq: a Lanczos start's surround survives the solve where `keep
   o.width = o.height = 64;
   o.role = RebakeRole::Data;
   o.surround = 4;
-  const Image area = atlas::rebake(src, {mesh}, o);
+  const Image area = atlas::rebake(src, {mesh}, o, test::cpu_engine());
   std::vector<uint8_t> baked;
   const Image start = atlas::rebake_lanczos(src, {mesh}, o, area, &baked);
   atlas::LsqBakeStats stats;

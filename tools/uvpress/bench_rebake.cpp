@@ -73,11 +73,11 @@ void bench_rebake(const Globals& g, uint32_t size, uint32_t out_size, int repeat
   o.role = atlas::RebakeRole::Color;
   for (auto& b : available_backends(g)) {
     atlas::RebakeStats stats;
-    atlas::rebake(src, {mesh}, o, &stats, b.engine.get());  // warm-up: pipelines, buffers, page faults
+    atlas::rebake(src, {mesh}, o, *b.engine, &stats);  // warm-up: pipelines, buffers, page faults
     double best = 1e300, best_sampling = 1e300;
     for (int r = 0; r < repeats; ++r) {
       const auto t0 = std::chrono::steady_clock::now();
-      atlas::rebake(src, {mesh}, o, &stats, b.engine.get());
+      atlas::rebake(src, {mesh}, o, *b.engine, &stats);
       best = std::min(best, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
       best_sampling = std::min(best_sampling, stats.sample_seconds);
     }
@@ -216,6 +216,7 @@ void bench_rebake_lsq(const std::vector<std::string>& assets, int points) {
       break;
     }
   }
+  const auto cpu = engine::make_cpu_engine({});  // the area bake on the oracle, as the solve's own filter
   for (Case& cs : cases) {
     for (auto [degrees, scale] : {std::pair{30.0, 1.0}, std::pair{0.0, 0.7}, std::pair{30.0, 0.7}}) {
       BenchLayout L = cs.layout;
@@ -224,7 +225,7 @@ void bench_rebake_lsq(const std::vector<std::string>& assets, int points) {
       atlas::RebakeOptions o;
       o.width = o.height = size, o.role = atlas::RebakeRole::Color;
       const auto t0 = std::chrono::steady_clock::now();
-      const Image area = atlas::rebake(cs.source, {mesh}, o);
+      const Image area = atlas::rebake(cs.source, {mesh}, o, *cpu);
       const double area_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       atlas::LsqBakeStats st;
       const Image lsq = atlas::rebake_least_squares(cs.source, {mesh}, o, area, &st);

@@ -1,5 +1,7 @@
 // uvpress compute engine: the one interface behind which the Vulkan and the native CPU
 // backends live. It knows images, views and triangles; nothing about meshes or glTF.
+// This header (and shaders/layout.h, whose structs it uses) is all the host may include:
+// the rest of engine/ is the backends' own (a private include path of uvpress_engine).
 #pragma once
 
 #include "layout.h"
@@ -71,9 +73,6 @@ struct ViewSetDesc {
   const float* texture = nullptr;  // texture_width x texture_height luminance, row 0 on top
   uint32_t texture_width = 0, texture_height = 0;
 };
-
-// Throws EngineError when a view set breaks the kernels' limits (size, ranges, guard band).
-void check_view_set(const ViewSetDesc& desc);
 
 // Views prepared on an engine: coverage and reference renders, made once and reused by
 // every round of candidates. Opaque; only the engine that made it can use it.
@@ -147,11 +146,6 @@ struct MeshRenders {
 };
 constexpr uint32_t kNoMeshTriangle = 0xffffffffu;
 
-// Throws EngineError for a description that breaks the limits above.
-void check_mesh_render(const MeshRenderDesc& desc);
-// Checks `desc` and returns its result sized for every camera (coverage and pixels zeroed).
-MeshRenders sized_mesh_renders(const MeshRenderDesc& desc);
-
 // ---- Texture re-bake sampling (host/atlas/rebake.cpp; engine/cpu/rebake_texels.cpp) ----
 //
 // The per-texel sampling loop of a re-bake. The host sets up the triangles (texel units,
@@ -197,17 +191,15 @@ struct RebakeTexelsDesc {
   const uint32_t* owner = nullptr;
 };
 
-// Throws EngineError for a description that breaks the rules above.
-void check_rebake_texels(const RebakeTexelsDesc& desc);
+// The rule above, as functions: part of the engine's contract, not of a backend. The host
+// needs it itself: it picks owners by the kernel's own geometry, and its least-squares
+// bake (host/atlas/rebake_lsq.cpp) filters squares centred on its sample points, one call
+// per point inside its own loops, where an Engine method would add only a virtual call
+// (on every backend it would run this same double-precision code on the host).
 
 // Squared distance from p to triangle t (0 inside or on an edge) and the closest point:
 // the geometry both the host's owner search and the CPU kernel use.
 double rebake_closest_point(const RebakeTriangle& t, double px, double py, double& qx, double& qy);
-
-// The CPU kernel (the oracle, double precision, deterministic for any thread count):
-// writes `channels` floats for every owned texel of `texels` (width * height * channels),
-// leaves the others untouched. threads 0 = hardware concurrency.
-void rebake_texels_cpu(const RebakeTexelsDesc& desc, float* texels, unsigned threads = 0);
 
 // Texel index i wrapped into [0, n) by a glTF wrap mode (anything unknown as REPEAT).
 int rebake_wrap(int i, int n, int mode);
@@ -215,9 +207,9 @@ int rebake_wrap(int i, int n, int mode);
 // The kernel's filter for one footprint: the square [bx, bx + size] x [by, by + size] of new
 // texel space (size 1: one texel), n_x by n_y samples (t.ns) mapped through t (the owner) or the first
 // triangle of [first, last) that contains them, as described above; writes desc.channels
-// doubles to out (straight colour when premultiplied). rebake_texels_cpu calls it with the
-// texel's corner; host/atlas/rebake_lsq.cpp with a square centred on any sample point (its
-// band-limited target), so both bakes see one filter.
+// doubles to out (straight colour when premultiplied). The CPU backend calls it with each
+// owned texel's corner; host/atlas/rebake_lsq.cpp with a square centred on any sample point
+// (its band-limited target), so both bakes see one filter.
 void rebake_filter_box(const RebakeTexelsDesc& desc, const RebakeTriangle& t, const uint32_t* first,
                        const uint32_t* last, double bx, double by, double* out, double size = 1.0);
 
@@ -244,12 +236,16 @@ class Engine {
                            ViewImages* images = nullptr, float* lattice = nullptr) = 0;
 
   // Whole-mesh renders (see MeshRenderDesc). The default is the CPU reference
-  // (engine/cpu/render_mesh.cpp); the Vulkan backend runs render_mesh.comp.
+  // (engine/cpu/render_mesh.cpp); the Vulkan backend runs render_mesh.comp. Throws
+  // EngineError for a description that breaks the limits there.
   virtual MeshRenders render_mesh(const MeshRenderDesc& desc);
 
-  // Re-bake sampling (see RebakeTexelsDesc): writes every owned texel of `texels`. The
-  // default is rebake_texels_cpu; the Vulkan backend runs rebake.comp (fp32, local frames).
-  virtual void rebake_texels(const RebakeTexelsDesc& desc, float* texels);
+  // Re-bake sampling (see RebakeTexelsDesc): writes `channels` floats for every owned texel
+  // of `texels` (width * height * channels), leaves the others untouched. The CPU backend
+  // is the oracle (rebake_filter_box per texel, double precision, on its threads; the bits
+  // do not depend on their count); the Vulkan backend runs rebake.comp (fp32, local
+  // frames). Throws EngineError for a description that breaks the rules there.
+  virtual void rebake_texels(const RebakeTexelsDesc& desc, float* texels) = 0;
 
   // Validation-layer errors seen so far (always 0 on the CPU backend).
   virtual uint64_t validation_errors() const { return 0; }

@@ -1,0 +1,26 @@
+// What the backends share behind engine.h, and the host never sees: the checks of each
+// kernel's description (so both backends refuse the same descriptions with the same
+// message) and the CPU backend's re-bake kernel.
+#pragma once
+
+#include "engine.h"
+
+namespace uvpress::engine {
+
+// Throws EngineError when a view set breaks the kernels' limits (size, ranges, guard band).
+void check_view_set(const ViewSetDesc& desc);
+
+// Throws EngineError for a MeshRenderDesc that breaks its limits.
+void check_mesh_render(const MeshRenderDesc& desc);
+// Checks `desc` and returns its result sized for every camera (coverage and pixels zeroed).
+MeshRenders sized_mesh_renders(const MeshRenderDesc& desc);
+
+// Throws EngineError for a RebakeTexelsDesc that breaks its rules.
+void check_rebake_texels(const RebakeTexelsDesc& desc);
+
+// Engine::rebake_texels on the CPU (the oracle, double precision): checks `desc`, then
+// rebake_filter_box for every owned texel, tiles handed out to `threads` (>= 1) threads;
+// every texel depends on its own footprint only, so the bits do not depend on `threads`.
+void rebake_texels_cpu(const RebakeTexelsDesc& desc, float* texels, unsigned threads);
+
+}  // namespace uvpress::engine
