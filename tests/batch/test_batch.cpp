@@ -3,12 +3,14 @@
 #include <catch2/catch.hpp>
 
 #include "batch/corpus.h"
+#include "batch/input_hash.h"
+#include "batch/manifest.h"
 #include "core/report_schema.h"
 #include "io/atomic_file.h"
 #include "io/gltf_io.h"
 #include "io/references.h"
-#include "pipeline/batch.h"
 #include "pipeline/demo_asset.h"
+#include "pipeline/reparam.h"
 #include "support.h"
 
 #include <algorithm>
@@ -64,7 +66,7 @@ void write_manifest(const test::fs::path& file, const std::vector<std::string>& 
 TEST_CASE("batch: manifest names, shards and the array-index variables", "[batch]") {
   test::Scratch dir("batch-manifest");
   write_manifest(dir / "m.txt", {"# comment", "", "a/x.glb", "  b/x.glb  ", "/abs/y.gltf", "z w.glb"});
-  auto items = pipeline::read_manifest((dir / "m.txt").string());
+  auto items = batch::read_manifest((dir / "m.txt").string());
   REQUIRE(items.size() == 4);
   CHECK(items[0].input == (dir / "a/x.glb").string());
   CHECK(items[1].input == (dir / "b/x.glb").string());
@@ -73,13 +75,13 @@ TEST_CASE("batch: manifest names, shards and the array-index variables", "[batch
   CHECK(items[1].name == "x-2");
   CHECK(items[2].name == "y");
   CHECK(items[3].name == "z_w");
-  auto s0 = pipeline::select_shard(items, 0, 3), s1 = pipeline::select_shard(items, 1, 3);
+  auto s0 = batch::select_shard(items, 0, 3), s1 = batch::select_shard(items, 1, 3);
   CHECK(s0.size() == 2);
   CHECK(s0[1].position == 3);
   CHECK(s1.size() == 1);
-  CHECK_THROWS_AS(pipeline::select_shard(items, 3, 3), std::invalid_argument);
+  CHECK_THROWS_AS(batch::select_shard(items, 3, 3), std::invalid_argument);
   write_manifest(dir / "empty.txt", {"# nothing"});
-  CHECK_THROWS(pipeline::read_manifest((dir / "empty.txt").string()));
+  CHECK_THROWS(batch::read_manifest((dir / "empty.txt").string()));
 
   auto env = [](std::map<std::string, std::string> vars) {
     return [vars](const char* n) -> const char* {
@@ -87,16 +89,16 @@ TEST_CASE("batch: manifest names, shards and the array-index variables", "[batch
       return it == vars.end() ? nullptr : it->second.c_str();
     };
   };
-  auto slurm = pipeline::shard_from_environment(
+  auto slurm = batch::shard_from_environment(
       env({{"SLURM_ARRAY_TASK_ID", "7"}, {"SLURM_ARRAY_TASK_MIN", "5"}, {"SLURM_ARRAY_TASK_COUNT", "4"}}));
   CHECK(slurm.index == 2u);
   CHECK(slurm.count == 4u);
-  auto k8s = pipeline::shard_from_environment(env({{"JOB_COMPLETION_INDEX", "3"}}));
+  auto k8s = batch::shard_from_environment(env({{"JOB_COMPLETION_INDEX", "3"}}));
   CHECK(k8s.index == 3u);
   CHECK_FALSE(k8s.count);
-  CHECK(pipeline::shard_from_environment(env({{"AWS_BATCH_JOB_ARRAY_INDEX", "0"}})).index == 0u);
-  CHECK_FALSE(pipeline::shard_from_environment(env({})).index);
-  CHECK_THROWS_AS(pipeline::shard_from_environment(env({{"JOB_COMPLETION_INDEX", "x1"}})), std::invalid_argument);
+  CHECK(batch::shard_from_environment(env({{"AWS_BATCH_JOB_ARRAY_INDEX", "0"}})).index == 0u);
+  CHECK_FALSE(batch::shard_from_environment(env({})).index);
+  CHECK_THROWS_AS(batch::shard_from_environment(env({{"JOB_COMPLETION_INDEX", "x1"}})), std::invalid_argument);
 }
 
 TEST_CASE("batch: reports, summary, one failure never stops the others, resume", "[batch][cli]") {
@@ -130,8 +132,8 @@ TEST_CASE("batch: reports, summary, one failure never stops the others, resume",
     auto rep = read_json(out / (name + ".report.json"));
     CHECK(rep["status"] == "ok");
     CHECK(rep["schema"] == kReportSchema);
-    CHECK(rep["input_hash"] == pipeline::hash_asset(assets[size_t(k)].string()));
-    CHECK(rep["output_hash"] == pipeline::hash_asset((out / (name + ".glb")).string()));
+    CHECK(rep["input_hash"] == batch::hash_asset(assets[size_t(k)].string()));
+    CHECK(rep["output_hash"] == batch::hash_asset((out / (name + ".glb")).string()));
     CHECK(rep["reparam"]["cost_ratio"].get<double>() > 0);
     // The summary row and the table say what was written and the two q the guard compared.
     const auto& row = summary["assets"][k == 0 ? 0 : k + 1];
@@ -219,7 +221,7 @@ TEST_CASE("batch: SIGKILL mid-way, then resume: every output complete and valid"
         auto rep = read_json(e.path());
         if (rep["status"] == "ok") {
           ++ok;
-          CHECK(rep["output_hash"] == pipeline::hash_asset(rep["output"].get<std::string>()));
+          CHECK(rep["output_hash"] == batch::hash_asset(rep["output"].get<std::string>()));
         }
       }
     }
@@ -304,22 +306,22 @@ TEST_CASE("batch: input hashes cover a .glb's external files, read by the loader
   CHECK(io::load_gltf(inside).image_bytes[0].size() == test::fs::file_size(dir / "up" / "tex.png"));
 
   // A .glb's external image is part of its input hash.
-  const std::string h = pipeline::hash_asset(inside);
+  const std::string h = batch::hash_asset(inside);
   std::ofstream(dir / "up" / "tex.png", std::ios::app) << "x";
-  CHECK(pipeline::hash_asset(inside) != h);
+  CHECK(batch::hash_asset(inside) != h);
 
   // A FIFO is never opened (the hash would block forever), yet changes the hash.
   test::fs::remove(dir / "up" / "tex.png");
   REQUIRE(::mkfifo((dir / "up" / "tex.png").c_str(), 0644) == 0);
-  const std::string fifo = pipeline::hash_asset(inside);
+  const std::string fifo = batch::hash_asset(inside);
   CHECK_FALSE(fifo.empty());
   CHECK(fifo != h);
 
   // A file outside the folder is read only when the policy allows it.
-  const std::string refused = pipeline::hash_asset(outside), allowed = pipeline::hash_asset(outside, {true});
+  const std::string refused = batch::hash_asset(outside), allowed = batch::hash_asset(outside, {true});
   std::ofstream(dir / "outside.png", std::ios::app) << "x";
-  CHECK(pipeline::hash_asset(outside) == refused);
-  CHECK(pipeline::hash_asset(outside, {true}) != allowed);
+  CHECK(batch::hash_asset(outside) == refused);
+  CHECK(batch::hash_asset(outside, {true}) != allowed);
 }
 
 TEST_CASE("batch --texture-format astc: KTX2 copies beside each output, in its hash and report, resume redoes a lost copy",
@@ -359,7 +361,7 @@ TEST_CASE("batch --texture-format astc: KTX2 copies beside each output, in its h
       CHECK(vk_format == gpu[k]["vk_format"]);
       copies.push_back(ktx2);
     }
-    CHECK(rep["output_hash"] == pipeline::hash_asset(glb.string()));
+    CHECK(rep["output_hash"] == batch::hash_asset(glb.string()));
     CHECK(test::validate_gltf(glb)["numErrors"] == 0);
   }
   REQUIRE(copies.size() >= 2);
