@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # A one-node Slurm cluster on loopback, for trying uvpress-array.sbatch and for the
-# cluster integration test (tests/batch/test_slurm.cpp). Everything lives in DIR: its own
+# cluster integration test (tests/cli/test_slurm.cpp). Everything lives in DIR: its own
 # munged (socket and key in DIR), slurmctld and slurmd on free ports, a node with one
 # "gpu" GRES (a count, no device file) so that --gres=gpu:1 jobs schedule one at a time.
 #

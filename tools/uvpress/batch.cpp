@@ -1,12 +1,13 @@
 // uvpress batch --manifest LIST -o DIR [reparam options] [--eval] [--shard-index I
 //   --shard-count N] [--jobs N] [--force] [--collect]: reparam (and eval) over every asset a
 // manifest lists, resumable, sharded for array jobs (Slurm, Kubernetes, AWS Batch); see
-// host/pipeline/batch.h.
+// host/batch/batch.h.
 #include "cli.h"
 
+#include "batch/batch.h"
 #include "core/error.h"
-#include "pipeline/batch.h"
 
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <optional>
@@ -30,37 +31,36 @@ void write_line(const std::string& line) {
   }
 }
 
-std::string cell(const nlohmann::ordered_json& row, const char* key, const char* format) {
-  if (!row.contains(key) || !row[key].is_number()) return "-";
+// "-" for a figure the row lacks, or null in its report (NaN).
+std::string cell(const std::optional<double>& value, const char* format) {
+  if (!value || std::isnan(*value)) return "-";
   char buf[48];
-  std::snprintf(buf, sizeof buf, format, row[key].get<double>());
+  std::snprintf(buf, sizeof buf, format, *value);
   return buf;
 }
 
-void print_table(const nlohmann::ordered_json& summary) {
+void print_table(const batch::BatchSummary& summary) {
   size_t w = 5;
-  for (const auto& a : summary["assets"]) w = std::max(w, a["name"].get<std::string>().size());
+  for (const auto& a : summary.assets) w = std::max(w, a.name.size());
   std::printf("%-*s  %-8s  %-9s  %8s  %10s  %19s  %21s  %s\n", int(w), "asset", "status", "written", "seconds", "cost ratio",
               "q / q resize", "size in -> out", "output / error");
-  for (const auto& a : summary["assets"]) {
-    std::string status = a["status"].get<std::string>();
+  for (const auto& a : summary.assets) {
+    const std::string& status = a.status;
     // The whole asset (JSON, buffers, images) before and after.
-    std::string size = (a.contains("input_bytes") ? human_bytes(a["input_bytes"].get<uint64_t>()) : std::string("-")) + " -> " +
-                       (a.contains("output_bytes") ? human_bytes(a["output_bytes"].get<uint64_t>()) : std::string("-"));
-    std::string last = status == "ok" || status == "skipped" ? a.value("output", "") : a.value("error", "");
+    std::string size = (a.input_bytes ? human_bytes(*a.input_bytes) : std::string("-")) + " -> " +
+                       (a.output_bytes ? human_bytes(*a.output_bytes) : std::string("-"));
+    std::string last = status == "ok" || status == "skipped" ? a.output.value_or("") : a.error.value_or("");
     // "untouched": ok, but nothing was re-parameterized (the report's warnings say why).
-    const std::string written = a.value("written", "-");
-    const std::string q = a.contains("q") ? cell(a, "q", "%.3g") + " / " + cell(a, "q_resize", "%.3g") : "-";
-    std::printf("%-*s  %-8s  %-9s  %8s  %10s  %19s  %21s  %s\n", int(w), a["name"].get<std::string>().c_str(),
-                status == "failed" ? "FAILED" : status.c_str(), written.c_str(), cell(a, "seconds", "%.1f").c_str(),
-                cell(a, "cost_ratio", "%.3f").c_str(), q.c_str(), size.c_str(), last.c_str());
+    const std::string written = a.written.value_or("-");
+    const std::string q = a.q ? cell(a.q, "%.3g") + " / " + cell(a.q_resize, "%.3g") : "-";
+    std::printf("%-*s  %-8s  %-9s  %8s  %10s  %19s  %21s  %s\n", int(w), a.name.c_str(),
+                status == "failed" ? "FAILED" : status.c_str(), written.c_str(), cell(a.seconds, "%.1f").c_str(),
+                cell(a.cost_ratio, "%.3f").c_str(), q.c_str(), size.c_str(), last.c_str());
   }
-  const auto& c = summary["counts"];
-  std::printf("%zu assets: %d ok, %d skipped, %d failed", summary["assets"].size(), c.value("ok", 0), c.value("skipped", 0),
-              c.value("failed", 0) + c.value("missing", 0) + c.value("stale", 0));
-  if (summary.contains("shard"))
-    std::printf(" (shard %zu of %zu)", summary["shard"]["index"].get<size_t>(), summary["shard"]["count"].get<size_t>());
-  std::printf(" in %.1f s\n", summary["seconds"].get<double>());
+  std::printf("%zu assets: %zu ok, %zu skipped, %zu failed", summary.assets.size(), summary.count("ok"), summary.count("skipped"),
+              summary.count("failed") + summary.count("missing") + summary.count("stale"));
+  if (!summary.collected) std::printf(" (shard %zu of %zu)", summary.shard_index, summary.shard_count);
+  std::printf(" in %.1f s\n", summary.seconds);
 }
 
 }  // namespace
@@ -68,7 +68,7 @@ void print_table(const nlohmann::ordered_json& summary) {
 void add_batch(CLI::App& app, Globals& g) {
   auto* cmd = app.add_subcommand("batch", "reparam (and eval) over a manifest of assets: resumable, sharded, parallel");
   struct Args {
-    pipeline::BatchOptions o;
+    batch::BatchOptions o;
     bool no_optimize = false, collect = false;
     std::vector<double> grid;
     std::optional<size_t> shard_index, shard_count;
@@ -121,7 +121,7 @@ void add_batch(CLI::App& app, Globals& g) {
   cmd->add_flag("--collect", a->collect, "Process nothing: summarize every asset's report in DIR (after an array job)");
   cmd->callback([&g, a] {
     g.action = [&g, a]() -> int {
-      pipeline::BatchOptions o = a->o;
+      batch::BatchOptions o = a->o;
       o.reparam.optimize = !a->no_optimize;
       if (a->gpu.format == "astc") o.astc = a->gpu.astc;
       o.reparam.block = block_alignment(a->gpu, o.reparam.block, a->block_align->count() > 0);
@@ -131,15 +131,15 @@ void add_batch(CLI::App& app, Globals& g) {
       if (!a->grid.empty()) o.eval_options.cost_grid = a->grid;
       if (a->collect) {
         g.prepare_outputs({});  // --report; DIR is read, not written
-        auto summary = pipeline::collect_batch(o);
+        const batch::BatchSummary summary = batch::collect_batch(o);
         print_table(summary);
-        g.write_report(summary);
-        return summary["counts"].value("ok", 0) == int(summary["assets"].size()) ? 0 : 1;
+        g.write_report(batch::to_json(summary));
+        return summary.count("ok") == summary.assets.size() ? 0 : 1;
       }
       try {
-        auto env = pipeline::shard_from_environment([](const char* n) { return std::getenv(n); });
+        auto env = batch::shard_from_environment([](const char* n) { return std::getenv(n); });
         size_t items = 0;
-        if (!a->shard_count && !env.count && (a->shard_index || env.index)) items = pipeline::read_manifest(o.manifest).size();
+        if (!a->shard_count && !env.count && (a->shard_index || env.index)) items = batch::read_manifest(o.manifest).size();
         o.shard_index = a->shard_index.value_or(env.index.value_or(0));
         o.shard_count = a->shard_count ? *a->shard_count : env.count ? *env.count : (a->shard_index || env.index) ? items : 1;
         if (g.verbose && !env.source.empty() && !a->shard_index)
@@ -166,17 +166,17 @@ void add_batch(CLI::App& app, Globals& g) {
         }
         return e;
       };
-      nlohmann::ordered_json summary;
+      batch::BatchSummary summary;
       try {
-        summary = pipeline::run_batch(o, factory, write_line);
+        summary = batch::run_batch(o, factory, write_line);
       } catch (const std::invalid_argument& e) {
         throw UsageError(e.what());
       }
       print_table(summary);
       std::fflush(stdout);
-      write_line("batch: summary in " + pipeline::summary_path(o));
-      g.write_report(summary);
-      return summary["counts"].value("failed", 0) > 0 ? 1 : 0;
+      write_line("batch: summary in " + batch::summary_path(o));
+      g.write_report(batch::to_json(summary));
+      return summary.count("failed") > 0 ? 1 : 0;
     };
     // Usage errors found after parsing (bad shard) exit 2 like CLI11's own.
     auto inner = g.action;

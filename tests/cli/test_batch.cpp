@@ -1,14 +1,14 @@
-// uvpress batch: manifests, per-asset reports and summary, resume, shards, --jobs, and a
-// batch killed with SIGKILL mid-way then resumed.
+// uvpress batch: per-asset reports and summary, resume, shards, --collect, --jobs, a batch
+// killed with SIGKILL mid-way then resumed, --texture-format astc and --strict.
 #include <catch2/catch.hpp>
 
-#include "batch/corpus.h"
+#include "batch/input_hash.h"
 #include "core/report_schema.h"
 #include "io/atomic_file.h"
 #include "io/gltf_io.h"
 #include "io/references.h"
-#include "pipeline/batch.h"
 #include "pipeline/demo_asset.h"
+#include "pipeline/reparam.h"
 #include "support.h"
 
 #include <algorithm>
@@ -17,10 +17,7 @@
 #include <cstring>
 #include <fcntl.h>
 #include <fstream>
-#include <map>
-#include <set>
 #include <spawn.h>
-#include <sys/stat.h>
 #include <sys/wait.h>
 #include <thread>
 
@@ -61,44 +58,6 @@ void write_manifest(const test::fs::path& file, const std::vector<std::string>& 
 
 }  // namespace
 
-TEST_CASE("batch: manifest names, shards and the array-index variables", "[batch]") {
-  test::Scratch dir("batch-manifest");
-  write_manifest(dir / "m.txt", {"# comment", "", "a/x.glb", "  b/x.glb  ", "/abs/y.gltf", "z w.glb"});
-  auto items = pipeline::read_manifest((dir / "m.txt").string());
-  REQUIRE(items.size() == 4);
-  CHECK(items[0].input == (dir / "a/x.glb").string());
-  CHECK(items[1].input == (dir / "b/x.glb").string());
-  CHECK(items[2].input == "/abs/y.gltf");
-  CHECK(items[0].name == "x-1");
-  CHECK(items[1].name == "x-2");
-  CHECK(items[2].name == "y");
-  CHECK(items[3].name == "z_w");
-  auto s0 = pipeline::select_shard(items, 0, 3), s1 = pipeline::select_shard(items, 1, 3);
-  CHECK(s0.size() == 2);
-  CHECK(s0[1].position == 3);
-  CHECK(s1.size() == 1);
-  CHECK_THROWS_AS(pipeline::select_shard(items, 3, 3), std::invalid_argument);
-  write_manifest(dir / "empty.txt", {"# nothing"});
-  CHECK_THROWS(pipeline::read_manifest((dir / "empty.txt").string()));
-
-  auto env = [](std::map<std::string, std::string> vars) {
-    return [vars](const char* n) -> const char* {
-      auto it = vars.find(n);
-      return it == vars.end() ? nullptr : it->second.c_str();
-    };
-  };
-  auto slurm = pipeline::shard_from_environment(
-      env({{"SLURM_ARRAY_TASK_ID", "7"}, {"SLURM_ARRAY_TASK_MIN", "5"}, {"SLURM_ARRAY_TASK_COUNT", "4"}}));
-  CHECK(slurm.index == 2u);
-  CHECK(slurm.count == 4u);
-  auto k8s = pipeline::shard_from_environment(env({{"JOB_COMPLETION_INDEX", "3"}}));
-  CHECK(k8s.index == 3u);
-  CHECK_FALSE(k8s.count);
-  CHECK(pipeline::shard_from_environment(env({{"AWS_BATCH_JOB_ARRAY_INDEX", "0"}})).index == 0u);
-  CHECK_FALSE(pipeline::shard_from_environment(env({})).index);
-  CHECK_THROWS_AS(pipeline::shard_from_environment(env({{"JOB_COMPLETION_INDEX", "x1"}})), std::invalid_argument);
-}
-
 TEST_CASE("batch: reports, summary, one failure never stops the others, resume", "[batch][cli]") {
   test::Scratch dir("batch-cli");
   auto assets = write_assets(dir.path(), 3);
@@ -130,8 +89,8 @@ TEST_CASE("batch: reports, summary, one failure never stops the others, resume",
     auto rep = read_json(out / (name + ".report.json"));
     CHECK(rep["status"] == "ok");
     CHECK(rep["schema"] == kReportSchema);
-    CHECK(rep["input_hash"] == pipeline::hash_asset(assets[size_t(k)].string()));
-    CHECK(rep["output_hash"] == pipeline::hash_asset((out / (name + ".glb")).string()));
+    CHECK(rep["input_hash"] == batch::hash_asset(assets[size_t(k)].string()));
+    CHECK(rep["output_hash"] == batch::hash_asset((out / (name + ".glb")).string()));
     CHECK(rep["reparam"]["cost_ratio"].get<double>() > 0);
     // The summary row and the table say what was written and the two q the guard compared.
     const auto& row = summary["assets"][k == 0 ? 0 : k + 1];
@@ -219,7 +178,7 @@ TEST_CASE("batch: SIGKILL mid-way, then resume: every output complete and valid"
         auto rep = read_json(e.path());
         if (rep["status"] == "ok") {
           ++ok;
-          CHECK(rep["output_hash"] == pipeline::hash_asset(rep["output"].get<std::string>()));
+          CHECK(rep["output_hash"] == batch::hash_asset(rep["output"].get<std::string>()));
         }
       }
     }
@@ -283,45 +242,6 @@ TEST_CASE("batch: SIGKILL mid-way, then resume: every output complete and valid"
                            << " orphaned temporaries (never renamed into place)");
 }
 
-TEST_CASE("batch: input hashes cover a .glb's external files, read by the loader's rule", "[batch]") {
-  test::Scratch dir("hash-refs");
-  test::fs::create_directories(dir / "up");
-  io::save_gltf(pipeline::make_demo_asset({4, 16}), (dir / "up" / "demo.gltf").string());
-  json j = read_json(dir / "up" / "demo.gltf");
-  std::ifstream bin(dir / "up" / j["buffers"][0]["uri"].get<std::string>(), std::ios::binary);
-  const std::vector<uint8_t> bin_bytes(std::istreambuf_iterator<char>(bin), {});
-  test::fs::copy_file(dir / "up" / j["images"][0]["uri"].get<std::string>(), dir / "up" / "tex.png");
-  test::fs::copy_file(dir / "up" / "tex.png", dir / "outside.png");
-  j["buffers"][0].erase("uri");
-  const auto glb_with = [&](const std::string& uri, const std::string& name) {
-    j["images"][0] = {{"uri", uri}};
-    const auto glb = test::make_glb(j.dump(), bin_bytes);
-    const auto path = dir / "up" / name;
-    std::ofstream(path, std::ios::binary).write(reinterpret_cast<const char*>(glb.data()), std::streamsize(glb.size()));
-    return path.string();
-  };
-  const std::string inside = glb_with("tex.png", "inside.glb"), outside = glb_with("../outside.png", "outside.glb");
-  CHECK(io::load_gltf(inside).image_bytes[0].size() == test::fs::file_size(dir / "up" / "tex.png"));
-
-  // A .glb's external image is part of its input hash.
-  const std::string h = pipeline::hash_asset(inside);
-  std::ofstream(dir / "up" / "tex.png", std::ios::app) << "x";
-  CHECK(pipeline::hash_asset(inside) != h);
-
-  // A FIFO is never opened (the hash would block forever), yet changes the hash.
-  test::fs::remove(dir / "up" / "tex.png");
-  REQUIRE(::mkfifo((dir / "up" / "tex.png").c_str(), 0644) == 0);
-  const std::string fifo = pipeline::hash_asset(inside);
-  CHECK_FALSE(fifo.empty());
-  CHECK(fifo != h);
-
-  // A file outside the folder is read only when the policy allows it.
-  const std::string refused = pipeline::hash_asset(outside), allowed = pipeline::hash_asset(outside, {true});
-  std::ofstream(dir / "outside.png", std::ios::app) << "x";
-  CHECK(pipeline::hash_asset(outside) == refused);
-  CHECK(pipeline::hash_asset(outside, {true}) != allowed);
-}
-
 TEST_CASE("batch --texture-format astc: KTX2 copies beside each output, in its hash and report, resume redoes a lost copy",
           "[batch][cli][astc]") {
   test::Scratch dir("batch-astc");
@@ -359,7 +279,7 @@ TEST_CASE("batch --texture-format astc: KTX2 copies beside each output, in its h
       CHECK(vk_format == gpu[k]["vk_format"]);
       copies.push_back(ktx2);
     }
-    CHECK(rep["output_hash"] == pipeline::hash_asset(glb.string()));
+    CHECK(rep["output_hash"] == batch::hash_asset(glb.string()));
     CHECK(test::validate_gltf(glb)["numErrors"] == 0);
   }
   REQUIRE(copies.size() >= 2);

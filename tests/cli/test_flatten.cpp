@@ -375,8 +375,11 @@ TEST_CASE("flatten --assign on Duck: charts that share texels get their own, the
   CHECK(j["layouts"][0]["shared_texel_charts"].get<size_t>() > 0);
   CHECK(iso["charts_flattened"].get<size_t>() + iso["charts_kept"].get<size_t>() == j["layouts"][0]["charts"].get<size_t>());
   CHECK(iso["charts_flattened"].get<size_t>() >= j["layouts"][0]["shared_texel_charts"].get<size_t>());
-  // Every chart kept is named, with its reason, in a warning.
-  CHECK(r.err_lines().size() == iso["charts_kept"].get<size_t>());
+  // Every chart kept is named, with its reason, in a warning (progress lines, which a slow
+  // machine prints for stages past 5 s, are not counted).
+  size_t warnings = 0;
+  for (const auto& line : r.err_lines()) warnings += line.find(": warning: ") != std::string::npos;
+  CHECK(warnings == iso["charts_kept"].get<size_t>());
   CHECK(j["flips"] == 0);
   CHECK(j["overlaps_new"] == 0);
   CHECK(j["q"].is_number());
