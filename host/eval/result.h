@@ -2,7 +2,7 @@
 // the 20 views against the reference, eq. 22-23; c_r in image texels relative to the
 // reference's driving image, with the paper's chart texels of eq. 20-21 beside it), the
 // as-written score of every other file, and the pixel savings between curves. `to_json`
-// is the report (README, "eval report"); callers read fields, never keys.
+// is eval's --report (README, "CLI reference"); callers read fields, never keys.
 #pragma once
 
 #include "engine.h"

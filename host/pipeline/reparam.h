@@ -5,10 +5,10 @@
 // the glTF. Everything else in the file is kept as it is.
 #pragma once
 
+#include "core/texture_cost.h"
 #include "engine.h"
 #include "eval/eval.h"
 #include "flatten/flatten.h"
-#include "core/texture_cost.h"
 #include "io/gltf_io.h"
 #include "io/gltf_prune.h"
 #include "perceptual/triangle_stage.h"
@@ -121,7 +121,8 @@ struct StageSeconds {
   double candidates_and_guard = 0;  // scoring candidates and the resize as written
 };
 
-// What reparam did to the file (README, "reparam report"; to_json is that report).
+// What reparam did to the file; to_json is the --report docs/DEVELOPERS.md lists under
+// `uvpress reparam`.
 struct ReparamResult {
   engine::DeviceInfo device;
   // The views candidates and the guard were scored with, when they were.
