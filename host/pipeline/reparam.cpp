@@ -942,7 +942,6 @@ struct Run {
   std::string score_failure;                      // why eval cannot score the asset
   Realized chosen;                                // the kept candidate, built into `file`
   Candidate chosen_plan;
-  std::string chosen_by;  // "reparam", "resize" or "untouched"
   ReparamResult result;
 };
 
@@ -1362,7 +1361,7 @@ void guard_against_resize(Run& run) {
   const io::GltfFile& original = run.original;
   io::GltfFile& file = run.file;
   Realized& chosen = run.chosen;
-  std::string& chosen_by = run.chosen_by;
+  std::string& chosen_by = run.result.chosen;
   json& warnings = run.warnings;
   double& t_score = run.t_score;
   Stopwatch t0;
@@ -1497,7 +1496,7 @@ ReparamResult reparam(io::GltfFile& file, engine::Engine& engine, const ReparamO
   choose_layout(run, plans);
   if (!o.curve_costs.empty() && run.scorer) build_curve(run);
   if (layout_out) *layout_out = file;
-  run.chosen_by = run.prepared.empty() ? "untouched" : "reparam";
+  result.chosen = run.prepared.empty() ? "untouched" : "reparam";
   result.guard.skipped = run.score_failure;
   if (o.guard && o.max_gmsd <= 0 && run.scorer) guard_against_resize(run);
   if (o.max_gmsd > 0 && !run.chosen.textures.empty()) size_to_max_gmsd(run);
@@ -1509,13 +1508,12 @@ ReparamResult reparam(io::GltfFile& file, engine::Engine& engine, const ReparamO
     run.warnings.push_back("unreferenced accessors and bufferViews kept: " + result.pruned.skipped);
 
   const Realized& chosen = run.chosen;
-  const bool resized = run.chosen_by == "resize";
+  const bool resized = result.chosen == "resize";
   result.stages.triangle_stage = run.t_triangle;
   result.stages.mesh_stage = chosen.t_mesh;
   result.stages.pack = chosen.t_pack;
   result.stages.rebake = chosen.t_bake;
   result.stages.candidates_and_guard = run.t_score;
-  result.chosen = run.chosen_by;
   result.layout = chosen.name;
   if (resized) result.q = result.guard.q_resize;
   else if (chosen.q >= 0) result.q = chosen.q;
