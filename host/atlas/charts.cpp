@@ -29,6 +29,33 @@ Charts find_charts(const Mesh& mesh) {
   return charts;
 }
 
+std::vector<ChartMesh> split_charts(const Mesh& mesh, const Charts& charts) {
+  std::vector<ChartMesh> out(charts.count);
+  std::vector<uint32_t> local(mesh.uv_count(), UINT32_MAX);  // UV vertex -> index in its chart
+  for (size_t t = 0; t < mesh.triangle_count(); ++t) {
+    ChartMesh& c = out[charts.chart_of_triangle[t]];
+    c.triangles.push_back(uint32_t(t));
+    for (size_t k = 0; k < 3; ++k) {
+      const uint32_t u = mesh.uv_triangles[3 * t + k];
+      if (local[u] == UINT32_MAX) local[u] = uint32_t(c.uv_vertices.size()), c.uv_vertices.push_back(u);
+      c.corners.push_back(local[u]);
+    }
+  }
+  return out;
+}
+
+Mesh chart_surface(const Mesh& mesh, const ChartMesh& chart) {
+  Mesh m;
+  m.positions.resize(3 * chart.uv_vertices.size());
+  for (size_t i = 0; i < chart.triangles.size(); ++i)
+    for (size_t k = 0; k < 3; ++k) {
+      const uint32_t p = mesh.triangles[3 * size_t(chart.triangles[i]) + k];
+      for (size_t d = 0; d < 3; ++d) m.positions[3 * size_t(chart.corners[3 * i + k]) + d] = mesh.positions[3 * size_t(p) + d];
+    }
+  m.triangles = chart.corners;
+  return m;
+}
+
 Mesh weld_uv_mesh(const float* positions, const float* uvs, size_t vertex_count, const uint32_t* indices,
                   size_t index_count) {
   // Keys are the float bits; "+ 0.0f" folds -0 into +0 first.
@@ -76,6 +103,27 @@ std::array<double, 2> shelf_layout(std::vector<ShelfBox>& boxes, double gap) {
     x += b.w + gap, row = std::max(row, b.h), used_w = std::max(used_w, x);
   }
   return {used_w, y + row + gap};
+}
+
+std::array<double, 2> shelve_charts(std::vector<std::vector<double>*>& chart_uvs) {
+  std::vector<ShelfBox> boxes(chart_uvs.size());
+  std::vector<std::array<double, 2>> lo(chart_uvs.size());
+  double total = 0;
+  for (size_t c = 0; c < chart_uvs.size(); ++c) {
+    double l[2] = {1e300, 1e300}, h[2] = {-1e300, -1e300};
+    const std::vector<double>& uv = *chart_uvs[c];
+    for (size_t i = 0; i < uv.size(); ++i) l[i % 2] = std::min(l[i % 2], uv[i]), h[i % 2] = std::max(h[i % 2], uv[i]);
+    lo[c] = {l[0], l[1]};
+    boxes[c].w = h[0] - l[0], boxes[c].h = h[1] - l[1];
+    total += boxes[c].w * boxes[c].h;
+  }
+  const auto extent = shelf_layout(boxes, 0.01 * std::sqrt(total));
+  for (size_t c = 0; c < chart_uvs.size(); ++c) {
+    std::vector<double>& uv = *chart_uvs[c];
+    const double at[2] = {boxes[c].x, boxes[c].y};
+    for (size_t i = 0; i < uv.size(); ++i) uv[i] = uv[i] - lo[c][i % 2] + at[i % 2];
+  }
+  return extent;
 }
 
 }  // namespace uvpress::atlas

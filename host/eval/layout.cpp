@@ -260,39 +260,19 @@ std::vector<float> isometric_uvs(const LayoutMesh& ref, double* aspect, nlohmann
   const Stopwatch t0;
   Mesh welded = atlas::weld_uv_mesh(ref.positions.data(), ref.uvs.data(), ref.positions.size() / 3, ref.indices.data(),
                                     ref.indices.size());
-  atlas::Charts charts = atlas::find_charts(welded);
-  const size_t nt = welded.triangle_count();
-  std::vector<double> uv(2 * welded.uv_count(), 0.0);  // per welded UV vertex, 3-D area scale
-  struct Box {
-    double lo[2] = {1e300, 1e300}, hi[2] = {-1e300, -1e300}, x = 0, y = 0;
-  };
-  std::vector<Box> boxes(charts.count);
-  std::vector<std::vector<uint32_t>> members(charts.count);  // welded UV vertices per chart
+  const atlas::Charts charts = atlas::find_charts(welded);
+  const std::vector<atlas::ChartMesh> pieces = atlas::split_charts(welded, charts);
+  std::vector<std::vector<double>> chart_uv(charts.count);  // per chart vertex, 3-D area scale
   size_t flattened = 0, kept = 0;
   for (uint32_t c = 0; c < charts.count; ++c) {
-    Mesh chart;
-    std::vector<uint32_t> local(welded.uv_count(), UINT32_MAX), back;
+    const atlas::ChartMesh& piece = pieces[c];
     double a3 = 0, a2 = 0;
-    for (size_t t = 0; t < nt; ++t) {
-      if (charts.chart_of_triangle[t] != c) continue;
-      for (int k = 0; k < 3; ++k) {
-        const uint32_t u = welded.uv_triangles[3 * t + size_t(k)];
-        if (local[u] == UINT32_MAX) {
-          local[u] = uint32_t(back.size());
-          back.push_back(u);
-          const uint32_t pv = welded.triangles[3 * t + size_t(k)];
-          for (int d = 0; d < 3; ++d) chart.positions.push_back(welded.positions[3 * size_t(pv) + size_t(d)]);
-        }
-        chart.triangles.push_back(local[u]);
-      }
-      a3 += area3d(ref.positions, ref.indices, t);
-      a2 += uv_area(ref.uvs, ref.indices, t);
-    }
-    std::vector<double> cuv;
+    for (uint32_t t : piece.triangles) a3 += area3d(ref.positions, ref.indices, t), a2 += uv_area(ref.uvs, ref.indices, t);
+    std::vector<double>& cuv = chart_uv[c];
     try {
       flatten::Options o;
       o.max_iterations = 300;
-      auto r = flatten::flatten(chart, o);
+      auto r = flatten::flatten(atlas::chart_surface(welded, piece), o);
       // A failed solve, flips or non-finite UVs: fall back to the input UVs like a non-disk.
       if (const std::string why = flatten::invalid_reason(r); !why.empty()) throw flatten::FlattenError(why);
       cuv = r.uv;
@@ -300,30 +280,21 @@ std::vector<float> isometric_uvs(const LayoutMesh& ref, double* aspect, nlohmann
     } catch (const flatten::FlattenError&) {
       // Not a disk (or unusable): the input UVs at the 3-D area scale.
       const double s = a2 > 0 ? std::sqrt(a3 / a2) : 1.0;
-      cuv.resize(2 * back.size());
-      for (size_t i = 0; i < back.size(); ++i)
-        cuv[2 * i] = welded.uvs[2 * size_t(back[i])] * s, cuv[2 * i + 1] = welded.uvs[2 * size_t(back[i]) + 1] * s;
+      cuv.resize(2 * piece.uv_vertices.size());
+      for (size_t i = 0; i < piece.uv_vertices.size(); ++i)
+        for (size_t d = 0; d < 2; ++d) cuv[2 * i + d] = welded.uvs[2 * size_t(piece.uv_vertices[i]) + d] * s;
       ++kept;
     }
-    for (size_t i = 0; i < back.size(); ++i) {
-      uv[2 * size_t(back[i])] = cuv[2 * i], uv[2 * size_t(back[i]) + 1] = cuv[2 * i + 1];
-      for (int d = 0; d < 2; ++d)
-        boxes[c].lo[d] = std::min(boxes[c].lo[d], cuv[2 * i + size_t(d)]),
-        boxes[c].hi[d] = std::max(boxes[c].hi[d], cuv[2 * i + size_t(d)]);
-    }
-    members[c] = std::move(back);
   }
-  // Shelves at one scale; a gutter of 1% of sqrt(area).
-  std::vector<atlas::ShelfBox> shelf(charts.count);
-  double total = 0;
+  // Shelves at one scale, then the atlas stretched to the unit square.
+  std::vector<std::vector<double>*> shelved;
+  for (auto& cuv : chart_uv) shelved.push_back(&cuv);
+  const auto [used_w, used_h] = atlas::shelve_charts(shelved);
+  std::vector<double> uv(2 * welded.uv_count(), 0.0);  // per welded UV vertex
   for (uint32_t c = 0; c < charts.count; ++c)
-    shelf[c].w = boxes[c].hi[0] - boxes[c].lo[0], shelf[c].h = boxes[c].hi[1] - boxes[c].lo[1], total += shelf[c].w * shelf[c].h;
-  const auto [used_w, used_h] = atlas::shelf_layout(shelf, 0.01 * std::sqrt(total));
-  for (uint32_t c = 0; c < charts.count; ++c) boxes[c].x = shelf[c].x, boxes[c].y = shelf[c].y;
-  for (uint32_t c = 0; c < charts.count; ++c)
-    for (uint32_t u : members[c]) {
-      uv[2 * size_t(u)] = (uv[2 * size_t(u)] - boxes[c].lo[0] + boxes[c].x) / used_w;
-      uv[2 * size_t(u) + 1] = (uv[2 * size_t(u) + 1] - boxes[c].lo[1] + boxes[c].y) / used_h;
+    for (size_t i = 0; i < pieces[c].uv_vertices.size(); ++i) {
+      const size_t u = pieces[c].uv_vertices[i];
+      uv[2 * u] = chart_uv[c][2 * i] / used_w, uv[2 * u + 1] = chart_uv[c][2 * i + 1] / used_h;
     }
   *aspect = used_w / used_h;
   // Back to the layout's vertices (a vertex's welded UV vertex is the same in every corner).

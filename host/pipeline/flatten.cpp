@@ -109,25 +109,13 @@ FlattenResult flatten_gltf(io::GltfFile& file, const flatten::Options& o, const 
     const auto& prim = asset.primitives[p];
     split.push_back(split_primitive(prim));
     const auto& pc = split.back();
-    const size_t nt = pc.welded.triangle_count();
+    const std::vector<atlas::ChartMesh> pieces = atlas::split_charts(pc.welded, pc.charts);
     for (uint32_t c = 0; c < pc.charts.count; ++c) {
       FlattenedChart chart;
       chart.label = "mesh " + std::to_string(prim.mesh) + " primitive " + std::to_string(prim.primitive) + " chart " +
                     std::to_string(c);
-      std::vector<uint32_t> local(pc.welded.uv_count(), UINT32_MAX), back;
-      for (size_t t = 0; t < nt; ++t) {
-        if (pc.charts.chart_of_triangle[t] != c) continue;
-        for (int k = 0; k < 3; ++k) {
-          const uint32_t u = pc.welded.uv_triangles[3 * t + size_t(k)];
-          if (local[u] == UINT32_MAX) {
-            local[u] = uint32_t(back.size());
-            back.push_back(u);
-            const uint32_t pv = pc.welded.triangles[3 * t + size_t(k)];
-            for (int d = 0; d < 3; ++d) chart.mesh.positions.push_back(pc.welded.positions[3 * size_t(pv) + size_t(d)]);
-          }
-          chart.mesh.triangles.push_back(local[u]);
-        }
-      }
+      const std::vector<uint32_t>& back = pieces[c].uv_vertices;
+      chart.mesh = atlas::chart_surface(pc.welded, pieces[c]);
       // Holes filled virtually (fan to a temporary centroid vertex per extra boundary loop),
       // dropped after the solve. A chart that still cannot be flattened (non-manifold, a
       // handle, a degenerate Tutte embedding) keeps its input UVs, scaled into its shelf,
@@ -163,42 +151,25 @@ FlattenResult flatten_gltf(io::GltfFile& file, const flatten::Options& o, const 
           keep_input(why);
         }
       }
-      placed.push_back({p, std::move(back), charts.size()});
+      placed.push_back({p, back, charts.size()});
       charts.push_back(std::move(chart));
     }
   }
   if (progress) progress("flatten");
 
-  // Shelf layout at one common scale (UV area = 3-D area; atlas::shelf_layout).
-  struct Box {
-    double lo[2], hi[2], x = 0, y = 0;
-  };
-  std::vector<Box> box(charts.size());
-  std::vector<atlas::ShelfBox> shelf(charts.size());
-  double total_area = 0;
-  for (size_t c = 0; c < charts.size(); ++c) {
-    Box& b = box[c];
-    b.lo[0] = b.lo[1] = 1e300, b.hi[0] = b.hi[1] = -1e300;
-    const auto& uv = charts[c].result.uv;
-    for (size_t i = 0; i < uv.size(); ++i) b.lo[i % 2] = std::min(b.lo[i % 2], uv[i]), b.hi[i % 2] = std::max(b.hi[i % 2], uv[i]);
-    shelf[c].w = b.hi[0] - b.lo[0], shelf[c].h = b.hi[1] - b.lo[1];
-    total_area += shelf[c].w * shelf[c].h;
-  }
-  atlas::shelf_layout(shelf, 0.01 * std::sqrt(total_area));
-  for (size_t c = 0; c < charts.size(); ++c) box[c].x = shelf[c].x, box[c].y = shelf[c].y;
-  // Per primitive: the new UV of every glTF vertex.
-  std::vector<std::vector<double>> prim_uv(asset.primitives.size());
-  for (size_t p = 0; p < asset.primitives.size(); ++p) prim_uv[p].assign(2 * asset.primitives[p].vertex_count(), 0.0);
+  // Shelf layout at one common scale (UV area = 3-D area; atlas::shelve_charts).
+  std::vector<std::vector<double>> chart_uv;
+  std::vector<std::vector<double>*> shelved;
+  for (const auto& chart : charts) chart_uv.push_back(chart.result.uv);
+  for (auto& uv : chart_uv) shelved.push_back(&uv);
+  atlas::shelve_charts(shelved);
   std::vector<double> all;  // every placed UV, for the common normalization
   std::vector<std::vector<double>> welded_uv(split.size());
   for (size_t p = 0; p < split.size(); ++p) welded_uv[p].assign(2 * split[p].welded.uv_count(), 0.0);
   for (const auto& pl : placed) {
-    const auto& uv = charts[pl.chart].result.uv;
-    const Box& b = box[pl.chart];
-    for (size_t i = 0; i < pl.welded_uv_vertex.size(); ++i) {
-      welded_uv[pl.prim][2 * size_t(pl.welded_uv_vertex[i])] = uv[2 * i] - b.lo[0] + b.x;
-      welded_uv[pl.prim][2 * size_t(pl.welded_uv_vertex[i]) + 1] = uv[2 * i + 1] - b.lo[1] + b.y;
-    }
+    const auto& uv = chart_uv[pl.chart];
+    for (size_t i = 0; i < pl.welded_uv_vertex.size(); ++i)
+      for (size_t d = 0; d < 2; ++d) welded_uv[pl.prim][2 * size_t(pl.welded_uv_vertex[i]) + d] = uv[2 * i + d];
   }
   for (auto& w : welded_uv) all.insert(all.end(), w.begin(), w.end());
   normalize_unit_square(all);

@@ -58,7 +58,7 @@ IsometricCharts isometric_charts(const std::vector<ChartGeometry>& charts, const
   for (size_t c = 0; c < charts.size(); ++c) {
     const ChartGeometry& g = charts[c];
     Mesh mesh;
-    mesh.positions = g.positions;
+    mesh.positions = *g.positions;
     mesh.triangles = *g.triangles;
     flatten::ChartResult flat;
     try {

@@ -26,7 +26,7 @@ namespace uvpress::pipeline {
 // One chart as reparam holds it: positions (3 per local vertex), triangles (3 local
 // indices each, positive orientation in `uv`) and the input UVs in source texels.
 struct ChartGeometry {
-  std::vector<double> positions;
+  const std::vector<double>* positions = nullptr;  // 3 per local vertex
   const std::vector<uint32_t>* triangles = nullptr;
   const std::vector<double>* uv = nullptr;
 };

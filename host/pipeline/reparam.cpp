@@ -136,6 +136,7 @@ struct Chart {
   std::vector<uint32_t> vertices;     // welded UV vertex ids of the set, local order
   std::vector<uint32_t> local;        // 3 local vertex indices per triangle, positive orientation
   std::vector<double> uv;             // input, texel units of the driver (2 per local vertex)
+  std::vector<double> positions;      // 3 per local vertex (its welded UV vertex's position)
   std::vector<double> new_uv;         // after the mesh stage, same units
   bool rigid = false;                 // mixed orientation (folded / partly mirrored): not optimized
   bool shared = false;                // shares source texels with another chart: moved with it, unreshaped
@@ -236,23 +237,12 @@ void find_shared_texels(Prepared& P) {
 // Flattens every chart of `P` for the isometric layout (a folded chart too: the solve does
 // not start from its UVs, and unfolds it) and groups the packing units, once per layout:
 // every candidate built from it (the least-squares variants) reuses the charts.
-void prepare_isometric(const io::Asset& asset, const Layout& L, Prepared& P, const flatten::Options& options) {
+void prepare_isometric(Prepared& P, const flatten::Options& options) {
   std::vector<ChartGeometry> geometry(P.charts.size());
   for (size_t c = 0; c < P.charts.size(); ++c) {
     const Chart& ch = P.charts[c];
-    const io::Primitive& prim = asset.primitives[size_t(L.uv_sets[ch.uv_set].primitive)];
     ChartGeometry& g = geometry[c];
-    g.triangles = &ch.local, g.uv = &ch.uv;
-    // Positions per local vertex (the welded UV vertex's position, any of its corners).
-    g.positions.assign(3 * ch.vertices.size(), 0.0);
-    std::map<uint32_t, uint32_t> local_of;
-    for (uint32_t v = 0; v < ch.vertices.size(); ++v) local_of[ch.vertices[v]] = v;
-    for (uint32_t t : ch.triangles)
-      for (int k = 0; k < 3; ++k) {
-        const uint32_t pv = prim.indices[3 * size_t(t) + size_t(k)];
-        const uint32_t l = local_of.at(P.welded_of_vertex[ch.uv_set][pv]);
-        for (int d = 0; d < 3; ++d) g.positions[3 * size_t(l) + size_t(d)] = prim.positions[3 * size_t(pv) + size_t(d)];
-      }
+    g.positions = &ch.positions, g.triangles = &ch.local, g.uv = &ch.uv;
   }
   P.isometric = isometric_charts(geometry, options);
   P.isometric_units.clear();
@@ -963,24 +953,14 @@ void find_layout_charts(const io::Asset& asset, const Layout& L, Prepared& P, do
     for (size_t c = 0; c < prim.indices.size(); ++c) welded_of_vertex[si][prim.indices[c]] = welded.uv_triangles[c];
     atlas::Charts found = atlas::find_charts(welded);
 
-    const size_t first_chart = charts.size();
-    charts.resize(first_chart + found.count);
-    for (size_t t = 0; t < prim.triangle_count(); ++t) charts[first_chart + found.chart_of_triangle[t]].triangles.push_back(uint32_t(t));
-    for (size_t c = first_chart; c < charts.size(); ++c) {
-      Chart& ch = charts[c];
+    for (atlas::ChartMesh& piece : atlas::split_charts(welded, found)) {
+      Chart& ch = charts.emplace_back();
       ch.uv_set = si;
-      std::map<uint32_t, uint32_t> local_of;
-      for (uint32_t t : ch.triangles)
-        for (int k = 0; k < 3; ++k) {
-          uint32_t w = welded.uv_triangles[3 * t + uint32_t(k)];
-          auto [it, fresh] = local_of.emplace(w, uint32_t(ch.vertices.size()));
-          if (fresh) {
-            ch.vertices.push_back(w);
-            ch.uv.push_back(welded.uvs[2 * w] * W);
-            ch.uv.push_back(welded.uvs[2 * w + 1] * H);
-          }
-          ch.local.push_back(it->second);
-        }
+      ch.positions = atlas::chart_surface(welded, piece).positions;
+      ch.triangles = std::move(piece.triangles);
+      ch.vertices = std::move(piece.uv_vertices);
+      ch.local = std::move(piece.corners);
+      for (uint32_t w : ch.vertices) ch.uv.push_back(welded.uvs[2 * w] * W), ch.uv.push_back(welded.uvs[2 * w + 1] * H);
       // Orientation: all triangles one way (a mirrored chart is flipped consistently);
       // mixed orientations mean folds or overlaps in UV, kept rigid.
       size_t positive = 0, negative = 0;
@@ -1152,7 +1132,7 @@ void prepare_layout(Run& run, size_t li) {
   if (o.isometric) {
     const std::string stage = "flatten (layout " + std::to_string(li) + ")";
     if (progress) progress(stage, 0, 1);
-    prepare_isometric(asset, L, P, o.flatten);
+    prepare_isometric(P, o.flatten);
     if (progress) progress(stage, 1, 1);
     for (const std::string& k : P.isometric.kept) warnings.push_back("layout " + std::to_string(li) + " " + k + " (input shape kept)");
   }
