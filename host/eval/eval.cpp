@@ -31,10 +31,9 @@
 //   same UVs, re-baked like every other layout: the paper's protocol, so figures can be set
 //   beside the paper's), every other file (a glTF of the same mesh: reparam's output, an
 //   xatlas or Blender layout), and with `flatten` the isometric layout ("flatten": charts
-//   from the input's UV seams flattened as `uvpress flatten` flattens them (flatten_chart:
-//   holes filled for the solve); charts that are no disk even then, or whose flattened
-//   boundary runs over itself, keep their input UVs scaled to their 3-D area; laid out on
-//   shelves at one scale).
+//   from the input's UV seams flattened by host/flatten's progressive solver, charts that
+//   are not disks keep their input UVs scaled to their 3-D area, laid out on shelves at one
+//   scale).
 // - Each layout's full texture: the input's own; for every other layout, the reference
 //   texture re-baked into its UVs (atlas::rebake) at the size where c_r = 1, when its triangles
 //   correspond one to one with the reference's (same count, same corner positions);

@@ -3,7 +3,6 @@
 
 #include "atlas/charts.h"
 #include "atlas/rebake.h"
-#include "atlas/uv_overlap.h"
 #include "core/error.h"
 #include "core/stopwatch.h"
 #include "flatten/flatten.h"
@@ -270,26 +269,20 @@ std::vector<float> isometric_uvs(const LayoutMesh& ref, double* aspect, nlohmann
     double a3 = 0, a2 = 0;
     for (uint32_t t : piece.triangles) a3 += area3d(ref.positions, ref.indices, t), a2 += uv_area(ref.uvs, ref.indices, t);
     std::vector<double>& cuv = chart_uv[c];
-    std::vector<double> input_uv(2 * piece.uv_vertices.size());
-    for (size_t i = 0; i < piece.uv_vertices.size(); ++i)
-      for (size_t d = 0; d < 2; ++d) input_uv[2 * i + d] = welded.uvs[2 * size_t(piece.uv_vertices[i]) + d];
-    // Flattened as `uvpress flatten` flattens a chart (holes filled for the solve); a chart
-    // that is no disk, a failed solve, flips, non-finite UVs or a boundary that runs over
-    // itself keeps its input UVs at the 3-D area scale.
     try {
       flatten::Options o;
       o.max_iterations = 300;
-      const Mesh surface = atlas::chart_surface(welded, piece);
-      flatten::Result r = flatten::flatten_chart(surface, o).result;
+      auto r = flatten::flatten(atlas::chart_surface(welded, piece), o);
+      // A failed solve, flips or non-finite UVs: fall back to the input UVs like a non-disk.
       if (const std::string why = flatten::invalid_reason(r); !why.empty()) throw flatten::FlattenError(why);
-      if (!atlas::find_new_overlaps(input_uv.data(), r.uv.data(), surface.triangles.data(), surface.triangle_count()).empty())
-        throw flatten::FlattenError("the flattened chart runs over itself");
-      cuv = std::move(r.uv);
+      cuv = r.uv;
       ++flattened;
     } catch (const flatten::FlattenError&) {
+      // Not a disk (or unusable): the input UVs at the 3-D area scale.
       const double s = a2 > 0 ? std::sqrt(a3 / a2) : 1.0;
-      cuv = std::move(input_uv);
-      for (double& x : cuv) x *= s;
+      cuv.resize(2 * piece.uv_vertices.size());
+      for (size_t i = 0; i < piece.uv_vertices.size(); ++i)
+        for (size_t d = 0; d < 2; ++d) cuv[2 * i + d] = welded.uvs[2 * size_t(piece.uv_vertices[i]) + d] * s;
       ++kept;
     }
   }

@@ -6,7 +6,6 @@
 #include "eval/eval.h"
 #include "eval/resize.h"
 #include "io/asset.h"
-#include "io/gltf_io.h"
 #include "io/atomic_file.h"
 #include "io/image_io.h"
 #include "perceptual/triangle_view.h"
@@ -426,25 +425,6 @@ TEST_CASE("eval: the isometric layout and another file of the same mesh, report 
   CHECK(art.reference_contact.width == 5 * 32);
 }
 
-
-TEST_CASE("eval: the isometric layout flattens a chart with a hole as uvpress flatten does", "[eval]") {
-  const auto dir = test::shared_dir();
-  if (!dir) UVPRESS_SKIP("no ../shared: the shared assets are not here");
-  // Duck has 10 charts; one has a hole, which the plain solve refuses (it kept its input
-  // UVs) and flatten_chart fills for the solve.
-  const io::GltfFile duck = io::load_gltf((*dir / "assets/Duck/glTF-Binary/Duck.glb").string());
-  eval::EvalOptions o;
-  o.resolution = 64;
-  o.cost_grid = {1.0};
-  o.flatten = true;
-  const eval::EvalResult r = eval::evaluate(duck, {}, test::cpu_engine(), o);
-  REQUIRE(r.layouts.size() == 2);
-  const auto& info = r.layouts[1].isometric;
-  CHECK(info["charts"] == 10);
-  CHECK(info["flattened"] == 10);
-  CHECK(info["kept_input_uvs"] == 0);
-  CHECK(r.layouts[1].curve[0].q > 0);
-}
 TEST_CASE("eval: a file of another mesh is an input error", "[eval]") {
   io::GltfFile a = pipeline::make_demo_asset({16, 64}), b = pipeline::make_demo_asset({8, 64});
   b.path = "other.glb";
