@@ -269,6 +269,10 @@ std::vector<float> isometric_uvs(const LayoutMesh& ref, double* aspect, nlohmann
     double a3 = 0, a2 = 0;
     for (uint32_t t : piece.triangles) a3 += area3d(ref.positions, ref.indices, t), a2 += uv_area(ref.uvs, ref.indices, t);
     std::vector<double>& cuv = chart_uv[c];
+    // The plain solve, not flatten_chart: a chart with holes keeps its input UVs. Filled and
+    // flattened, its box holds the holes and the shelves waste them, a weaker baseline
+    // (measured: Duck's UV area 0.66 -> 0.50 of the square, Fox's 0.42 -> 0.34 and its pixel
+    // ratio against the input 1.10 -> 1.30).
     try {
       flatten::Options o;
       o.max_iterations = 300;
