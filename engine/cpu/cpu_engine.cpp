@@ -69,6 +69,14 @@ class CpuEngine final : public Engine {
   std::vector<float> gmsd(const ImagePairs& p) override {
     constexpr size_t kSmallImage = 64 * 64;  // a view of the triangle stage
     std::vector<float> out(p.count);
+    if (p.sizes) {  // pairs of their own sizes: one a thread
+      std::vector<size_t> at(p.count + 1, 0);
+      for (uint32_t k = 0; k < p.count; ++k) at[k + 1] = at[k] + p.pixels(k);
+      parallel_for(p.count, threads_, [&](uint32_t k) {
+        out[k] = cpu::gmsd<float>(p.first + at[k], p.second + at[k], p.sizes[2 * k], p.sizes[2 * k + 1]);
+      }, 1);
+      return out;
+    }
     const size_t n = size_t(p.width) * p.height;
     parallel_for(
         p.count, threads_, [&](uint32_t k) { out[k] = cpu::gmsd<float>(p.first + k * n, p.second + k * n, p.width, p.height); },

@@ -90,11 +90,15 @@ struct ViewImages {
   std::vector<float> candidate;   // candidate render after the least-squares bake, 0 where empty
 };
 
-// A batch of equal-sized greyscale image pairs, [0,1] luminance, pair after pair.
+// A batch of greyscale image pairs, [0,1] luminance, pair after pair: all width x height,
+// or with `sizes` pair k of sizes[2k] x sizes[2k + 1] (eval's views cropped to the asset;
+// width and height are then unused).
 struct ImagePairs {
   uint32_t width = 0, height = 0, count = 0;
-  const float* first = nullptr;   // count * width * height
+  const float* first = nullptr;  // the pairs' pixels, one image after the other
   const float* second = nullptr;
+  const uint32_t* sizes = nullptr;
+  size_t pixels(uint32_t k) const { return sizes ? size_t(sizes[2 * k]) * sizes[2 * k + 1] : size_t(width) * height; }
 };
 
 // ---- Whole-mesh renders (eval, seed 001 section 5.1) ----

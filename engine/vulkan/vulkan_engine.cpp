@@ -132,12 +132,16 @@ class VulkanEngine final : public Engine {
   std::vector<float> gmsd(const ImagePairs& pairs) override {
     std::vector<float> out(pairs.count);
     const uint64_t n = uint64_t(pairs.width) * pairs.height;
-    if (pairs.count == 0 || n == 0) return out;
-    if (pairs.width > shader::kViewMaxSize || pairs.height > shader::kViewMaxSize) {
-      // gmsd.comp holds one image per workgroup in shared memory (64 x 64 at most): larger
-      // ones (eval's views) are scored by the CPU reference, one image per thread.
+    if (pairs.count == 0 || (!pairs.sizes && n == 0)) return out;
+    if (pairs.sizes || pairs.width > shader::kViewMaxSize || pairs.height > shader::kViewMaxSize) {
+      // gmsd.comp holds one image per workgroup in shared memory (64 x 64 at most, one size
+      // a dispatch): larger ones and pairs of their own sizes (eval's views) are scored by
+      // the CPU reference, one image per thread.
+      std::vector<size_t> at(pairs.count + 1, 0);
+      for (uint32_t k = 0; k < pairs.count; ++k) at[k + 1] = at[k] + pairs.pixels(k);
       parallel_for(pairs.count, std::max(1u, std::thread::hardware_concurrency()), [&](uint32_t k) {
-        out[k] = cpu::gmsd<float>(pairs.first + k * n, pairs.second + k * n, pairs.width, pairs.height);
+        const uint32_t w = pairs.sizes ? pairs.sizes[2 * k] : pairs.width, h = pairs.sizes ? pairs.sizes[2 * k + 1] : pairs.height;
+        out[k] = cpu::gmsd<float>(pairs.first + at[k], pairs.second + at[k], w, h);
       }, 1);
       return out;
     }

@@ -9,10 +9,19 @@
 //   the smallest multiple of 16, at least 512, at which the `resolution_percentile` (95 %)
 //   of the visible screen area is magnified or 1:1, capped at `resolution_cap` (2048: 20
 //   reference views of 2048^2 floats are 320 MiB, and every render costs 16x a 512-px
-//   one). Views wider than the engine's 1024-px limit are rendered in tiles (one camera a
-//   tile) and stitched. Report: resolution, resolution_capped, texels_per_pixel (at the
-//   percentile and the median, at the chosen side), resolved_fraction (share of the
-//   visible screen area magnified or 1:1 there). A fixed --resolution reports the same.
+//   one). Where the cap binds, the cap bounds pixels, not the side: each view is cropped to
+//   the asset's screen rectangle (its vertices' bounding box, 2 pixels around), at the
+//   largest side up to the wanted one whose windows hold no more pixels than 20 capped
+//   whole views (CesiumMilkTruck: its rectangles fill half the frame on average, so its
+//   views resolve 1.4x finer for the same memory and time). Cropping drops background
+//   pixels from each view's GMSD pool, so it is used only where the cap binds: every other
+//   asset's figures stay as they were. Views wider than the engine's 1024-px limit are
+//   rendered in tiles (one camera a tile, all tiles of a view one size) and stitched.
+//   Report: resolution (the whole view's side), resolution_capped (the wanted side was not
+//   reached), resolution_cropped, view_pixels (rendered a view, on average),
+//   texels_per_pixel (at the percentile and the median, at the chosen side),
+//   resolved_fraction (share of the visible screen area magnified or 1:1 there). A fixed
+//   --resolution renders whole views and reports the same.
 //   At a side that resolves the texture, losing texels shows; at one that minifies it,
 //   each pixel takes one sample of several texels and q is mostly aliasing pattern.
 // - Renders: engine->render_mesh (CPU backend = oracle, Vulkan kernel render_mesh.comp).
@@ -161,18 +170,22 @@ std::optional<TextureFilter> parse_texture_filter(std::string_view text) {
   return std::nullopt;
 }
 
-std::array<float, 16> tile_camera(const std::array<float, 16>& m, uint32_t k, uint32_t a, uint32_t b) {
-  // NDC x' = k x + (k - 2a - 1), y' = k y + (2b + 1 - k): rows 0 and 1 rescaled and
-  // shifted by row 3 (clip w).
+std::array<float, 16> window_camera(const std::array<float, 16>& m, double side, double x0, double y0, double w,
+                                    double h) {
+  // NDC x' = (side / w) x + (side - 2 x0) / w - 1, y' = (side / h) y + 1 - (side - 2 y0) / h:
+  // rows 0 and 1 rescaled and shifted by row 3 (clip w).
   std::array<float, 16> t = m;
-  const double sx = double(k) - 2.0 * a - 1.0, sy = 2.0 * b + 1.0 - double(k);
+  const double kx = side / w, ky = side / h, sx = (side - 2.0 * x0) / w - 1.0, sy = 1.0 - (side - 2.0 * y0) / h;
   for (int c = 0; c < 4; ++c) {
-    t[size_t(c)] = float(k * double(m[size_t(c)]) + sx * double(m[size_t(12 + c)]));
-    t[size_t(4 + c)] = float(k * double(m[size_t(4 + c)]) + sy * double(m[size_t(12 + c)]));
+    t[size_t(c)] = float(kx * double(m[size_t(c)]) + sx * double(m[size_t(12 + c)]));
+    t[size_t(4 + c)] = float(ky * double(m[size_t(4 + c)]) + sy * double(m[size_t(12 + c)]));
   }
   return t;
 }
 
+std::array<float, 16> tile_camera(const std::array<float, 16>& m, uint32_t k, uint32_t a, uint32_t b) {
+  return window_camera(m, k, a, b, 1, 1);
+}
 
 Savings pixel_ratio_at_equal_q(const std::vector<std::pair<double, double>>& a,
                                const std::vector<std::pair<double, double>>& b, double noise_floor) {
@@ -262,25 +275,62 @@ Texture view_texture(const Image& image, TextureFilter filter, bool rgb = false,
   return t;
 }
 
-// Views of more than kMaxSide pixels a side are rendered as k x k tiles (engine cameras
-// that each frame one tile) and stitched. Calls render_mesh on chunks of whole views of
+// Views are rendered in tiles of at most the engine's side, in chunks of whole views of
 // about this many pixels, so that a 2048-pixel evaluation never holds more than a few
 // views at once beside the reference's.
 constexpr size_t kChunkPixels = size_t(20) * 1024 * 1024;
 
 uint32_t tiles_per_side(uint32_t res) { return (res + engine::kMeshRenderMaxSide - 1) / engine::kMeshRenderMaxSide; }
 
-// Renders every view of `m` textured with `tex` at res x res pixels, chunk by chunk:
-// fn(first view, views, pixels, coverage) with `views` stitched images of res x res x
-// channels and their covered triangles (chunks of `per_chunk` views; 0: kChunkPixels).
+// One view as rendered: the window of its camera's side x side pixels that is rendered (the
+// whole view, or where the resolution cap binds the asset's screen rectangle: eval.cpp,
+// "Resolution"), cut into tiles_x x tiles_y tiles of equal size within the engine's limit,
+// and where its pixels start among all the views' (views follow each other, each row-major).
+struct ViewFrame {
+  std::array<float, 16> camera;  // the whole view's
+  uint32_t side = 0;             // the whole view's pixels a side
+  bool cropped = false;          // false: the window is the whole view
+  uint32_t x0 = 0, y0 = 0;       // the window's top-left pixel in the whole view
+  uint32_t width = 0, height = 0, tiles_x = 1, tiles_y = 1;
+  size_t offset = 0;  // pixels of the views before this one
+  size_t pixels() const { return size_t(width) * height; }
+  uint32_t tile_width() const { return width / tiles_x; }
+  uint32_t tile_height() const { return height / tiles_y; }
+  // The camera of tile (a, b), a from the left, b from the top.
+  std::array<float, 16> tile(uint32_t a, uint32_t b) const {
+    if (!cropped) return tiles_x == 1 ? camera : tile_camera(camera, tiles_x, a, b);
+    return window_camera(camera, side, double(x0) + double(a) * tile_width(), double(y0) + double(b) * tile_height(),
+                         tile_width(), tile_height());
+  }
+  // The camera of the whole window (pixel (i, j) of the view's image).
+  std::array<float, 16> window() const { return cropped ? window_camera(camera, side, x0, y0, width, height) : camera; }
+};
+
+// Every camera's whole view, res x res, k x k tiles.
+std::vector<ViewFrame> square_frames(const std::vector<std::array<float, 16>>& cameras, uint32_t res) {
+  std::vector<ViewFrame> frames(cameras.size());
+  const uint32_t k = tiles_per_side(res);
+  for (size_t v = 0; v < cameras.size(); ++v) {
+    ViewFrame& f = frames[v];
+    f.camera = cameras[v], f.side = res, f.width = f.height = res, f.tiles_x = f.tiles_y = k;
+    f.offset = v * size_t(res) * res;
+  }
+  return frames;
+}
+
+size_t total_pixels(const std::vector<ViewFrame>& frames) {
+  return frames.empty() ? 0 : frames.back().offset + frames.back().pixels();
+}
+
+// Renders every view of `m` textured with `tex`, chunk by chunk: fn(first view, views,
+// pixels, coverage) with the `views` views' images (each width x height x channels, one
+// after the other) and their covered triangles. Chunks hold views of one tile size, at most
+// `per_chunk` of them (0: about kChunkPixels).
 template <class Fn>
-void render_views(engine::Engine& engine, const LayoutMesh& m, const Texture& tex,
-                  const std::vector<std::array<float, 16>>& cameras, uint32_t res, Timing& timing, Fn&& fn,
-                  size_t per_chunk = 0) {
-  const uint32_t k = tiles_per_side(res), T = res / k, C = tex.channels;
-  if (per_chunk == 0) per_chunk = std::max<size_t>(1, kChunkPixels / (size_t(res) * res));
+void render_views(engine::Engine& engine, const LayoutMesh& m, const Texture& tex, const std::vector<ViewFrame>& frames,
+                  Timing& timing, Fn&& fn, size_t per_chunk = 0) {
+  const uint32_t C = tex.channels;
   engine::MeshRenderDesc d;
-  d.width = d.height = T;
   d.positions = m.positions.data(), d.vertex_count = m.positions.size() / 3;
   d.indices = m.indices.data(), d.triangle_count = m.indices.size() / 3;
   d.uvs = m.uvs.data();
@@ -289,34 +339,51 @@ void render_views(engine::Engine& engine, const LayoutMesh& m, const Texture& te
   d.repeat = m.repeat;
   std::vector<float> stitched;
   std::vector<uint32_t> stitched_coverage;
-  for (size_t first = 0; first < cameras.size(); first += per_chunk) {
-    const size_t views = std::min(per_chunk, cameras.size() - first);
+  for (size_t first = 0; first < frames.size();) {
+    const ViewFrame& f0 = frames[first];
+    const size_t limit = per_chunk ? per_chunk : std::max<size_t>(1, kChunkPixels / f0.pixels());
+    size_t views = 1;
+    while (first + views < frames.size() && views < limit && frames[first + views].tile_width() == f0.tile_width() &&
+           frames[first + views].tile_height() == f0.tile_height())
+      ++views;
+    d.width = f0.tile_width(), d.height = f0.tile_height();
     d.cameras.clear();
-    for (size_t v = first; v < first + views; ++v)
-      for (uint32_t b = 0; b < k; ++b)
-        for (uint32_t a = 0; a < k; ++a) d.cameras.push_back(k == 1 ? cameras[v] : tile_camera(cameras[v], k, a, b));
+    bool tiled = false;
+    for (size_t v = first; v < first + views; ++v) {
+      tiled = tiled || frames[v].tiles_x * frames[v].tiles_y > 1;
+      for (uint32_t b = 0; b < frames[v].tiles_y; ++b)
+        for (uint32_t a = 0; a < frames[v].tiles_x; ++a) d.cameras.push_back(frames[v].tile(a, b));
+    }
     const Stopwatch t0;
     auto r = engine.render_mesh(d);
     timing.render += t0.seconds();
-    if (k == 1) {
+    if (!tiled) {
       fn(first, views, r.pixels.data(), r.coverage.data());
+      first += views;
       continue;
     }
-    stitched.assign(views * res * res * C, 0.0f);
-    stitched_coverage.assign(views * res * res, engine::kNoMeshTriangle);
-    for (size_t v = 0; v < views; ++v)
-      for (uint32_t b = 0; b < k; ++b)
-        for (uint32_t a = 0; a < k; ++a) {
-          const size_t tile_index = (v * k + b) * k + a;
-          const float* tile = r.pixels.data() + tile_index * size_t(T) * T * C;
-          const uint32_t* tile_coverage = r.coverage.data() + tile_index * size_t(T) * T;
-          for (uint32_t j = 0; j < T; ++j) {
-            const size_t row = (v * res + size_t(b) * T + j) * res + size_t(a) * T;
-            std::copy(tile + size_t(j) * T * C, tile + size_t(j + 1) * T * C, stitched.data() + row * C);
-            std::copy(tile_coverage + size_t(j) * T, tile_coverage + size_t(j + 1) * T, stitched_coverage.data() + row);
+    const size_t base = f0.offset;
+    const size_t chunk = frames[first + views - 1].offset + frames[first + views - 1].pixels() - base;
+    stitched.assign(chunk * C, 0.0f);
+    stitched_coverage.assign(chunk, engine::kNoMeshTriangle);
+    const size_t T = size_t(d.width) * d.height;
+    size_t tile_index = 0;
+    for (size_t v = first; v < first + views; ++v) {
+      const ViewFrame& f = frames[v];
+      for (uint32_t b = 0; b < f.tiles_y; ++b)
+        for (uint32_t a = 0; a < f.tiles_x; ++a, ++tile_index) {
+          const float* tile = r.pixels.data() + tile_index * T * C;
+          const uint32_t* tile_coverage = r.coverage.data() + tile_index * T;
+          for (uint32_t j = 0; j < d.height; ++j) {
+            const size_t row = f.offset - base + (size_t(b) * d.height + j) * f.width + size_t(a) * d.width;
+            std::copy(tile + size_t(j) * d.width * C, tile + size_t(j + 1) * d.width * C, stitched.data() + row * C);
+            std::copy(tile_coverage + size_t(j) * d.width, tile_coverage + size_t(j + 1) * d.width,
+                      stitched_coverage.data() + row);
           }
         }
+    }
     fn(first, views, stitched.data(), stitched_coverage.data());
+    first += views;
   }
 }
 
@@ -329,11 +396,20 @@ void for_each_view(size_t count, Fn&& fn) {
   for (long v = 0; v < long(count); ++v) fn(size_t(v));
 }
 
-// GMSD of `count` view pairs of res x res.
-void gmsd_views(engine::Engine& engine, const float* ref, const float* img, uint32_t res, size_t count, float* out,
-                Timing& timing) {
+// GMSD of the view pairs `frames` (reference and image pixels of those views, one after
+// the other): one call, with each pair's size where the views differ (cropped).
+void gmsd_views(engine::Engine& engine, const float* ref, const float* img, const ViewFrame* frames, size_t count,
+                float* out, Timing& timing) {
   const Stopwatch t0;
-  const auto g = engine.gmsd(engine::ImagePairs{res, res, uint32_t(count), ref, img});
+  bool one_size = true;
+  std::vector<uint32_t> sizes;
+  for (size_t v = 0; v < count; ++v) {
+    sizes.insert(sizes.end(), {frames[v].width, frames[v].height});
+    one_size = one_size && frames[v].width == frames[0].width && frames[v].height == frames[0].height;
+  }
+  engine::ImagePairs pairs{frames[0].width, frames[0].height, uint32_t(count), ref, img};
+  if (!one_size) pairs.sizes = sizes.data();
+  const auto g = engine.gmsd(pairs);
   std::copy(g.begin(), g.end(), out);
   timing.gmsd += t0.seconds();
 }
@@ -357,7 +433,8 @@ struct ReferenceViews {
 // paper's texels under the charts).
 struct Setup {
   LayoutMesh ref;
-  std::vector<std::array<float, 16>> cameras;
+  std::vector<std::array<float, 16>> cameras;  // the whole views (contact sheets)
+  std::vector<ViewFrame> frames;               // the views as scored
   TextureFilter filter = TextureFilter::Trilinear;
   ViewResolution resolution;
   bool lit = false;              // q is the lit q (EvalOptions::shading resolved)
@@ -402,32 +479,36 @@ LitSurface lit_surface(const LayoutMesh& m) {
 // shared sums: the same result for any thread count).
 template <class Fn>
 void render_scored_views(engine::Engine& engine, const Setup& s, const LayoutMesh& m, const LayoutTextures& tex,
-                         const std::vector<std::array<float, 16>>& cameras, uint32_t res, Timing& timing, Fn&& fn) {
+                         const std::vector<ViewFrame>& frames, Timing& timing, Fn&& fn) {
   if (!s.lit) {
-    render_views(engine, m, tex.driving, cameras, res, timing,
+    render_views(engine, m, tex.driving, frames, timing,
                  [&](size_t first, size_t views, const float* px, const uint32_t*) { fn(first, views, px, nullptr); });
     return;
   }
   const LitSurface surface = lit_surface(m);
-  const size_t n = size_t(res) * res;
+  size_t largest = 0;
+  for (const ViewFrame& f : frames) largest = std::max(largest, f.pixels());
   // Each chunk holds the luminance and 3 channels of every map: fewer views a chunk.
-  const size_t per_chunk = std::max<size_t>(1, kChunkPixels / (n * (1 + 3 * tex.maps.size())));
+  const size_t per_chunk = std::max<size_t>(1, kChunkPixels / (largest * (1 + 3 * tex.maps.size())));
   std::vector<std::vector<float>> map_px(tex.maps.size());
   std::vector<float> lit;
   render_views(
-      engine, m, tex.driving, cameras, res, timing,
+      engine, m, tex.driving, frames, timing,
       [&](size_t first, size_t views, const float* px, const uint32_t* coverage) {
-        const std::vector<std::array<float, 16>> chunk(cameras.begin() + long(first), cameras.begin() + long(first + views));
+        const std::vector<ViewFrame> chunk(frames.begin() + long(first), frames.begin() + long(first + views));
+        const size_t base = chunk.front().offset, n = total_pixels(chunk) - base;
         for (size_t k = 0; k < tex.maps.size(); ++k)
-          render_views(engine, m, tex.maps[k], chunk, res, timing,
-                       [&](size_t, size_t, const float* mp, const uint32_t*) { map_px[k].assign(mp, mp + views * n * 3); },
+          render_views(engine, m, tex.maps[k], chunk, timing,
+                       [&](size_t, size_t, const float* mp, const uint32_t*) { map_px[k].assign(mp, mp + n * 3); },
                        views);
         const Stopwatch t0;
-        lit.assign(views * n, 0.0f);
+        lit.assign(n, 0.0f);
         for_each_view(views, [&](size_t v) {
+          const ViewFrame& f = chunk[v];
+          const size_t at = f.offset - base;
           std::vector<const float*> maps(tex.maps.size());
-          for (size_t k = 0; k < maps.size(); ++k) maps[k] = map_px[k].data() + v * n * 3;
-          lit_luminance(surface, s.rig, cameras[first + v], res, res, coverage + v * n, maps, lit.data() + v * n);
+          for (size_t k = 0; k < maps.size(); ++k) maps[k] = map_px[k].data() + at * 3;
+          lit_luminance(surface, s.rig, f.window(), f.width, f.height, coverage + at, maps, lit.data() + at);
         });
         timing.shading += t0.seconds();
         fn(first, views, px, lit.data());
@@ -439,17 +520,16 @@ void render_scored_views(engine::Engine& engine, const Setup& s, const LayoutMes
 // turns textures into q. The noise floor passes cameras and reference views of its own
 // (shifted by a fraction of a pixel).
 Scores score_views(engine::Engine& engine, const Setup& s, const LayoutMesh& m, const LayoutTextures& tex,
-                   Timing& timing, const std::vector<std::array<float, 16>>* cameras = nullptr,
+                   Timing& timing, const std::vector<ViewFrame>* frames = nullptr,
                    const ReferenceViews* ref_views = nullptr) {
-  const uint32_t res = s.resolution.resolution;
-  const size_t n = size_t(res) * res;
+  const std::vector<ViewFrame>& views = frames ? *frames : s.frames;
   const ReferenceViews& ref = ref_views ? *ref_views : s.ref_views;
-  std::vector<float> g(s.cameras.size()), g_lit(s.lit ? s.cameras.size() : 0);
-  render_scored_views(engine, s, m, tex, cameras ? *cameras : s.cameras, res, timing,
-                      [&](size_t first, size_t views, const float* px, const float* lit) {
-                        gmsd_views(engine, ref.unlit.data() + first * n, px, res, views, g.data() + first, timing);
-                        if (lit) gmsd_views(engine, ref.lit.data() + first * n, lit, res, views, g_lit.data() + first, timing);
-                      });
+  std::vector<float> g(views.size()), g_lit(s.lit ? views.size() : 0);
+  render_scored_views(engine, s, m, tex, views, timing, [&](size_t first, size_t count, const float* px, const float* lit) {
+    const size_t at = views[first].offset;
+    gmsd_views(engine, ref.unlit.data() + at, px, &views[first], count, g.data() + first, timing);
+    if (lit) gmsd_views(engine, ref.lit.data() + at, lit, &views[first], count, g_lit.data() + first, timing);
+  });
   auto mean = [](const std::vector<float>& x) {
     double q = 0;
     for (float v : x) q += v;
@@ -507,17 +587,17 @@ uint64_t codec_bytes(const Setup& s, uint32_t width, uint32_t height) {
   return n;
 }
 
-// Every view of `m` textured with `tex`, res x res luminance each, view after view
-// (unlit, and lit when the evaluation is).
+// Every view of `m` textured with `tex`, its luminance, view after view (unlit, and lit
+// when the evaluation is).
 ReferenceViews reference_views(engine::Engine& engine, const Setup& s, const LayoutMesh& m, const LayoutTextures& tex,
-                               const std::vector<std::array<float, 16>>& cameras, uint32_t res, Timing& timing) {
+                               const std::vector<ViewFrame>& frames, Timing& timing) {
   ReferenceViews out;
-  const size_t n = size_t(res) * res;
-  out.unlit.resize(cameras.size() * n);
-  if (s.lit) out.lit.resize(cameras.size() * n);
-  render_scored_views(engine, s, m, tex, cameras, res, timing, [&](size_t first, size_t views, const float* px, const float* lit) {
-    std::copy(px, px + views * n, out.unlit.data() + first * n);
-    if (lit) std::copy(lit, lit + views * n, out.lit.data() + first * n);
+  out.unlit.resize(total_pixels(frames));
+  if (s.lit) out.lit.resize(out.unlit.size());
+  render_scored_views(engine, s, m, tex, frames, timing, [&](size_t first, size_t views, const float* px, const float* lit) {
+    const size_t at = frames[first].offset, n = frames[first + views - 1].offset + frames[first + views - 1].pixels() - at;
+    std::copy(px, px + n, out.unlit.data() + at);
+    if (lit) std::copy(lit, lit + n, out.lit.data() + at);
   });
   return out;
 }
@@ -569,28 +649,99 @@ std::vector<float> texels_per_pixel(engine::Engine& engine, const LayoutMesh& re
   return out;
 }
 
+// The asset's rectangle on screen in each view: NDC {x_lo, x_hi, y_lo, y_hi} of its
+// vertices (eval's cameras hold the whole mesh in front of them), clamped to the view.
+std::vector<std::array<double, 4>> screen_rectangles(const LayoutMesh& ref,
+                                                     const std::vector<std::array<float, 16>>& cameras) {
+  std::vector<std::array<double, 4>> out;
+  for (const auto& m : cameras) {
+    std::array<double, 4> r = {1, -1, 1, -1};
+    for (size_t v = 0; v < ref.positions.size() / 3; ++v) {
+      const float* p = ref.positions.data() + 3 * v;
+      double c[4];
+      for (int row = 0; row < 4; ++row)
+        c[row] = double(m[size_t(4 * row)]) * p[0] + double(m[size_t(4 * row + 1)]) * p[1] +
+                 double(m[size_t(4 * row + 2)]) * p[2] + double(m[size_t(4 * row + 3)]);
+      if (!(c[3] > 0)) return {};  // a vertex behind the eye: no rectangle to crop to
+      r[0] = std::min(r[0], c[0] / c[3]), r[1] = std::max(r[1], c[0] / c[3]);
+      r[2] = std::min(r[2], c[1] / c[3]), r[3] = std::max(r[3], c[1] / c[3]);
+    }
+    for (double& x : r) x = std::clamp(x, -1.0, 1.0);
+    out.push_back(r);
+  }
+  return out;
+}
+
+// The views at `side` pixels a side cropped to the asset's rectangles: each window holds its
+// rectangle and 2 pixels around it (the GMS gradient's reach), at least 16 pixels a side,
+// in whole pixels of the whole view, cut into tiles of equal size within the engine's limit.
+std::vector<ViewFrame> cropped_frames(const std::vector<std::array<float, 16>>& cameras,
+                                      const std::vector<std::array<double, 4>>& rects, uint32_t side) {
+  std::vector<ViewFrame> frames(cameras.size());
+  size_t offset = 0;
+  for (size_t v = 0; v < cameras.size(); ++v) {
+    ViewFrame& f = frames[v];
+    const auto& r = rects[v];
+    f.camera = cameras[v], f.side = side, f.cropped = true;
+    const double x_lo = (r[0] + 1) / 2 * side, x_hi = (r[1] + 1) / 2 * side;  // pixels from the left
+    const double y_lo = (1 - r[3]) / 2 * side, y_hi = (1 - r[2]) / 2 * side;  // pixels from the top
+    auto window = [&](double lo, double hi, uint32_t& origin, uint32_t& size, uint32_t& tiles) {
+      const double first = std::max(0.0, std::floor(lo) - 2), last = std::min(double(side), std::ceil(hi) + 2);
+      size = std::max<uint32_t>(16, uint32_t(last - first));
+      tiles = tiles_per_side(size);
+      size = (size + tiles - 1) / tiles * tiles;
+      origin = uint32_t(first);
+    };
+    window(x_lo, x_hi, f.x0, f.width, f.tiles_x);
+    window(y_lo, y_hi, f.y0, f.height, f.tiles_y);
+    f.offset = offset;
+    offset += f.pixels();
+  }
+  return frames;
+}
+
+// The views' resolution and frames (eval.cpp, "Resolution"). Where the cap binds, the views
+// are cropped to the asset's screen rectangle instead, at the largest side (a multiple of
+// 16, at most the wanted one and 2 kMaxResolution) whose windows hold no more pixels than
+// the capped whole views would: the same memory and time, more of the texture resolved.
 ViewResolution choose_resolution(engine::Engine& engine, const LayoutMesh& ref,
                                  const std::vector<std::array<float, 16>>& cameras, const EvalOptions& o,
-                                 Timing& timing) {
+                                 Timing& timing, std::vector<ViewFrame>& frames) {
   constexpr uint32_t kProbe = 512;  // the resolution texels per pixel are measured at
   const auto tpp = texels_per_pixel(engine, ref, cameras, kProbe, timing);
   ViewResolution r;
   r.percentile = o.resolution_percentile;
   auto at = [&](double p) { return tpp.empty() ? 0.0 : double(tpp[std::min(tpp.size() - 1, size_t(p * double(tpp.size())))]); };
   const double probe_tpp = at(o.resolution_percentile);
+  frames.clear();
   if (o.resolution == 0) {
     // The smallest side, a multiple of 16 (and of the tile count), at which the percentile
     // is magnified or 1:1.
     uint32_t want = std::max<uint32_t>(512, uint32_t(std::ceil(kProbe * probe_tpp / 16.0)) * 16);
     r.capped = want > o.resolution_cap;
-    want = std::min(want, o.resolution_cap);
-    const uint32_t k = tiles_per_side(want);
-    r.resolution = (want + 16 * k - 1) / (16 * k) * (16 * k);
+    if (r.capped) {
+      const auto rects = screen_rectangles(ref, cameras);
+      const size_t budget = cameras.size() * size_t(o.resolution_cap) * o.resolution_cap;
+      for (uint32_t side = std::min(want, 2 * kMaxResolution) / 16 * 16; !rects.empty() && side > o.resolution_cap; side -= 16) {
+        auto cropped = cropped_frames(cameras, rects, side);
+        if (total_pixels(cropped) > budget) continue;
+        frames = std::move(cropped);
+        r.resolution = side, r.cropped = true, r.capped = side < want;
+        break;
+      }
+    }
+    if (frames.empty()) {
+      want = std::min(want, o.resolution_cap);
+      const uint32_t k = tiles_per_side(want);
+      r.resolution = (want + 16 * k - 1) / (16 * k) * (16 * k);
+    }
     r.automatic = true;
   } else {
     const uint32_t k = tiles_per_side(o.resolution);
     r.resolution = o.resolution / k * k;
   }
+  if (frames.empty()) frames = square_frames(cameras, r.resolution);
+  r.view_pixels = cameras.empty() ? 0 : double(total_pixels(frames)) / double(cameras.size());
   const double scale = double(kProbe) / r.resolution;  // texels per pixel at res = at probe x scale
   r.texels_per_pixel = probe_tpp * scale;
   r.texels_per_pixel_median = at(0.5) * scale;
@@ -646,10 +797,10 @@ Setup set_up(const io::GltfFile& reference, engine::Engine& engine, const EvalOp
   for (size_t v = 0; v < ref.positions.size() / 3; ++v)
     for (int d = 0; d < 3; ++d) lo[d] = std::min(lo[d], double(ref.positions[3 * v + size_t(d)])), hi[d] = std::max(hi[d], double(ref.positions[3 * v + size_t(d)]));
   for (int d = 0; d < 3; ++d) s.radius = std::max(s.radius, hi[d] - lo[d]);
-  s.resolution = choose_resolution(engine, ref, s.cameras, o, timing);
+  s.resolution = choose_resolution(engine, ref, s.cameras, o, timing, s.frames);
   const uint32_t res = s.resolution.resolution;
   const LayoutTextures ref_tex = layout_textures(s, ref, ref.full, nullptr, false, timing);
-  s.ref_views = reference_views(engine, s, ref, ref_tex, s.cameras, res, timing);
+  s.ref_views = reference_views(engine, s, ref, ref_tex, s.frames, timing);
   if (o.noise_floor) {
     // How far q moves when only the sampling phase does: the input resized to half its
     // texels (Lanczos-3) scored as usual, again with the cameras and the reference views
@@ -666,14 +817,16 @@ Setup set_up(const io::GltfFile& reference, engine::Engine& engine, const EvalOp
       s.noise_floor_lit = std::max(s.noise_floor_lit, std::abs(other.q_lit - q.q_lit));
     };
     for (const double dy : {0.25, -0.25}) {
-      auto jittered = s.cameras;
-      const double sx = 2.0 * 0.25 / res, sy = 2.0 * dy / res;  // NDC units
-      for (auto& m : jittered)
+      auto jittered = s.frames;
+      const double sx = 2.0 * 0.25 / res, sy = 2.0 * dy / res;  // NDC units of the whole view
+      for (auto& f : jittered) {
+        auto& m = f.camera;
         for (int c = 0; c < 4; ++c) {
           m[size_t(c)] = float(double(m[size_t(c)]) + sx * double(m[size_t(12 + c)]));
           m[size_t(4 + c)] = float(double(m[size_t(4 + c)]) + sy * double(m[size_t(12 + c)]));
         }
-      const ReferenceViews ref_jittered = reference_views(engine, s, ref, ref_tex, jittered, res, timing);
+      }
+      const ReferenceViews ref_jittered = reference_views(engine, s, ref, ref_tex, jittered, timing);
       widen(score_views(engine, s, ref, half, timing, &jittered, &ref_jittered));
     }
     // The texel grid's phase too: one, two and three texels more a side (under 2 % more
@@ -707,7 +860,7 @@ Image contact_sheet(engine::Engine& engine, const LayoutMesh& m, const Image& te
   const Texture tex = view_texture(texture, filter, true);
   std::vector<float> pixels(cameras.size() * thumb * thumb * 3);
   Timing ignored;
-  render_views(engine, m, tex, cameras, thumb, ignored, [&](size_t first, size_t views, const float* px, const uint32_t*) {
+  render_views(engine, m, tex, square_frames(cameras, thumb), ignored, [&](size_t first, size_t views, const float* px, const uint32_t*) {
     std::copy(px, px + views * thumb * thumb * 3, pixels.data() + first * thumb * thumb * 3);
   });
   Image sheet;

@@ -40,7 +40,8 @@ constexpr uint32_t kMaxResolution = 4096;  // views of more than 1024 px are til
 struct EvalOptions {
   std::vector<double> cost_grid = {0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0};
   uint32_t resolution = 0;  // view images, pixels a side (8..kMaxResolution); 0: auto (eval.cpp, "Resolution")
-  uint32_t resolution_cap = 2048;       // auto: the largest side (512..kMaxResolution)
+  uint32_t resolution_cap = 2048;       // auto: the largest side (512..kMaxResolution); where it binds, views
+                                        // are cropped to the asset at cap^2 pixels a view on average (eval.cpp)
   double resolution_percentile = 0.95;  // auto: share of the visible screen area to resolve
   TextureFilter filter = TextureFilter::Trilinear;
   bool noise_floor = true;  // measure and report the quarter-pixel noise floor (one more render)
@@ -133,6 +134,14 @@ std::vector<std::array<float, 16>> dodecahedron_cameras(const float* positions, 
 // pixel (i, j) of the tile's render is pixel (a T + i, b T + j) of the whole view's, T the
 // tile's side. How views wider than the engine's limit are rendered.
 std::array<float, 16> tile_camera(const std::array<float, 16>& camera, uint32_t k, uint32_t a, uint32_t b);
+
+// A view's camera restricted to the window of w x h pixels whose top-left corner is pixel
+// (x0, y0) of the whole view of `side` x `side` pixels (x from the left, y from the top):
+// pixel (i, j) of the window's render is pixel (x0 + i, y0 + j) of the whole view's. How
+// views are cropped to the asset where the resolution cap binds; tile_camera is the window
+// (a, b, 1, 1) of a k x k view.
+std::array<float, 16> window_camera(const std::array<float, 16>& camera, double side, double x0, double y0, double w,
+                                    double h);
 
 // Savings of curve A against curve B: points (cost, q) by increasing cost. Returns the
 // geometric mean ratio c_A / c_B at equal q and the number of q levels used (0: the

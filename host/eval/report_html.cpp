@@ -143,7 +143,11 @@ void write_html_report(const EvalResult& report, const EvalArtifacts& art, const
   h << "<h1>uvpress eval</h1>\n<p>Asset <code>" << escape(report.asset) << "</code>, "
     << report.triangles << " textured triangles; " << report.views
     << " views from the vertices of a regular dodecahedron, " << report.resolution.resolution << "&times;"
-    << report.resolution.resolution << " pixels, " << escape(to_string(report.filter))
+    << report.resolution.resolution << " pixels"
+    << (report.resolution.cropped ? " cropped to the asset (" + std::to_string(std::lround(report.resolution.view_pixels)) +
+                                        " pixels a view on average)"
+                                  : std::string())
+    << ", " << escape(to_string(report.filter))
     << "; device " << escape(report.device.backend) << " ("
     << escape(report.device.name) << "). Quality q = mean GMSD against the input layout with its "
     << "full texture (lower is better); cost c<sub>r</sub> = image texels (W&times;H, what a user pays for) relative to the "

@@ -93,6 +93,8 @@ json EvalResult::to_json() const {
   report["resolution_mode"] = resolution.automatic ? "auto" : "fixed";
   report["resolution_cap"] = resolution_cap;
   report["resolution_capped"] = resolution.capped;
+  report["resolution_cropped"] = resolution.cropped;
+  report["view_pixels"] = resolution.view_pixels;
   report["texels_per_pixel"] = {{"percentile", resolution.percentile},
                                 {"value", resolution.texels_per_pixel},
                                 {"median", resolution.texels_per_pixel_median}};

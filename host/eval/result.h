@@ -26,8 +26,10 @@ const char* to_string(TextureFilter filter);
 
 // The view resolution an evaluation chose and what it resolves (eval.h, "Resolution").
 struct ViewResolution {
-  uint32_t resolution = 512;  // pixels a side
+  uint32_t resolution = 512;  // pixels a side of the whole view
   bool automatic = false, capped = false;
+  bool cropped = false;        // views cropped to the asset's screen rectangle (where the cap binds)
+  double view_pixels = 0;      // pixels rendered a view, on average
   double percentile = 0.95;
   double texels_per_pixel = 0;         // at the percentile, at `resolution`
   double texels_per_pixel_median = 0;  // at `resolution`

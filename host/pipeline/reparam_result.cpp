@@ -20,6 +20,7 @@ json ReparamResult::to_json() const {
     report["scoring"] = {{"resolution", scoring->resolution.resolution},
                          {"filter", eval::to_string(scoring->filter)},
                          {"resolution_capped", scoring->resolution.capped},
+                         {"resolution_cropped", scoring->resolution.cropped},
                          {"resolved_fraction", scoring->resolution.resolved_fraction},
                          {"shading", eval::to_string(scoring->shading)}};
   if (curve) {

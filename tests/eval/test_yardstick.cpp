@@ -286,6 +286,76 @@ TEST_CASE("eval: views larger than the engine's limit are tiled and score like o
   CHECK(a == Approx(b).epsilon(0.25));
 }
 
+TEST_CASE("eval: a window camera renders exactly its part of the whole view", "[eval][engine]") {
+  // A window neither square nor on a tile grid: pixel (i, j) of its render must be pixel
+  // (x0 + i, y0 + j) of the whole view's.
+  auto cpu = engine::make_cpu_engine({});
+  io::GltfFile file = pipeline::make_demo_asset({4, 128});
+  const io::Asset asset = io::build_asset(file);
+  const Image tex = io::decode_image(file.image_bytes[0], "demo");
+  const auto y = luminance_plane(tex);
+  const auto& p = asset.primitives.at(0);
+  const auto cams = eval::dodecahedron_cameras(p.positions.data(), p.vertex_count());
+  engine::MeshRenderDesc d;
+  d.positions = p.positions.data(), d.vertex_count = p.vertex_count();
+  d.indices = p.indices.data(), d.triangle_count = p.triangle_count();
+  d.uvs = p.uv_sets[0].uv.data();
+  d.texture = y.data(), d.texture_width = tex.width, d.texture_height = tex.height;
+  const uint32_t side = 600, x0 = 137, y0 = 201, w = 250, h = 130;
+  d.width = d.height = side;
+  d.cameras = {cams[3]};
+  const auto whole = cpu->render_mesh(d);
+  d.width = w, d.height = h;
+  d.cameras = {eval::window_camera(cams[3], side, x0, y0, w, h)};
+  const auto window = cpu->render_mesh(d);
+  size_t same = 0, covered = 0;
+  float worst = 0;
+  for (uint32_t j = 0; j < h; ++j)
+    for (uint32_t i = 0; i < w; ++i) {
+      const size_t a = size_t(j) * w + i, b = size_t(y0 + j) * side + x0 + i;
+      covered += whole.coverage[b] != engine::kNoMeshTriangle;
+      if (window.coverage[a] != whole.coverage[b]) continue;
+      ++same;
+      worst = std::max(worst, std::abs(window.pixels[a] - whole.pixels[b]));
+    }
+  INFO(same << " of " << w * h << " pixels with the same coverage (" << covered << " covered); worst difference " << worst);
+  CHECK(covered > size_t(w) * h / 4);
+  CHECK(double(same) >= 0.999 * w * h);
+  CHECK(worst < 0.01f);
+}
+
+TEST_CASE("eval: where the resolution cap binds, views are cropped to the asset and resolve more for the same pixels",
+          "[eval]") {
+  // Single-texel noise wants about 1,500-px views; at a cap of 512 the whole views minify
+  // it. Cropped to the sheet's screen rectangle, the same pixels resolve it finer.
+  const io::GltfFile file = noise_asset(512);
+  auto cpu = engine::make_cpu_engine({});
+  eval::EvalOptions o;
+  o.cost_grid = {0.5, 1.0};
+  o.artifacts = false;
+  o.noise_floor = false;
+  o.resolution_cap = 512;
+  const eval::EvalResult cropped = eval::evaluate(file, {}, *cpu, o);
+  o.resolution = 512;  // the whole views at the cap
+  const eval::EvalResult whole = eval::evaluate(file, {}, *cpu, o);
+  const eval::ViewResolution &vc = cropped.resolution, &vw = whole.resolution;
+  auto gap = [](const eval::EvalResult& r) { return r.layouts[0].curve[0].q - r.layouts[0].curve[1].q; };
+  INFO("cropped: side " << vc.resolution << ", " << vc.view_pixels << " pixels a view, resolved " << vc.resolved_fraction
+                        << ", gap " << gap(cropped));
+  INFO("whole at 512: resolved " << vw.resolved_fraction << ", gap " << gap(whole));
+  CHECK(vc.cropped);
+  CHECK(!vw.cropped);
+  CHECK(vc.resolution > 512);
+  CHECK(vc.view_pixels <= 512.0 * 512.0);  // no more pixels than the capped whole views
+  CHECK(vc.view_pixels > 0.8 * 512.0 * 512.0);  // and the budget spent
+  CHECK(vc.resolved_fraction > vw.resolved_fraction + 0.1);
+  const auto report = cropped.to_json();
+  CHECK(report["resolution_cropped"] == true);
+  CHECK(report["view_pixels"].get<double>() == Approx(vc.view_pixels));
+  // Halving the texels costs more q where the views resolve them.
+  CHECK(gap(cropped) > gap(whole));
+}
+
 TEST_CASE("eval: on every shared asset the input curve never rises with c_r beyond the noise floor", "[eval][shared]") {
   const auto dir = test::shared_dir();
   if (!dir) UVPRESS_SKIP("no ../shared: the shared assets are not here");

@@ -40,6 +40,8 @@ void add_bench_eval(CLI::App& bench, Globals& g) {
                                        {"triangles", r.triangles},
                                        {"views", r.views},
                                        {"resolution", r.resolution.resolution},
+                                       {"resolution_cropped", r.resolution.cropped},
+                                       {"view_pixels", r.resolution.view_pixels},
                                        {"filter", eval::to_string(r.filter)},
                                        {"shading", r.lit ? "lit" : "unlit"},
                                        {"resolved_fraction", r.resolution.resolved_fraction},

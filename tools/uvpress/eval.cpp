@@ -176,10 +176,11 @@ void add_eval(CLI::App& app, Globals& g) {
         }
       if (!r.shading_warning.empty()) summary += "; " + r.shading_warning;
       const std::string codec = o.codec ? ", after ASTC " + io::block_name(*o.codec) + " " + io::to_string(o.codec->quality) : "";
-      std::printf("eval: %zu layouts x %zu costs (image texels; input resized %s%s), %zu views at %u px (%s, %.0f%% of "
+      std::printf("eval: %zu layouts x %zu costs (image texels; input resized %s%s), %zu views at %u px%s (%s, %.0f%% of "
                   "the surface resolved, %s), noise floor q %.2g, in %.1f s%s\n",
                   r.layouts.size(), o.cost_grid.size(), r.input_resize.c_str(), codec.c_str(), r.views,
-                  r.resolution.resolution, eval::to_string(r.filter), 100 * r.resolution.resolved_fraction,
+                  r.resolution.resolution, r.resolution.cropped ? " cropped to the asset" : "", eval::to_string(r.filter),
+                  100 * r.resolution.resolved_fraction,
                   r.lit ? "lit" : "unlit", r.noise_floor(), r.seconds.total, summary.c_str());
       return 0;
     };
