@@ -1,3 +1,39 @@
+// Re-baking a texture into new UVs (rebake.h). How:
+//
+// For every texel of the new image, the triangle that owns it is found among the new-UV
+// triangles that overlap the texel's square (conservative rasterization): the one whose
+// distance to the texel centre is smallest (0 when the centre is inside), ties to the
+// lowest triangle index (meshes in order). The texel's footprint is mapped to the old
+// texture by that triangle's affine map (barycentrics), and the old texture is sampled:
+//
+// Filter: box-filtered supersampling of bilinear samples. The new texel's square maps to a
+// parallelogram in old texels with edges J e_x and J e_y (J = d old texel / d new texel);
+// n_x = ceil(|J e_x|) by n_y = ceil(|J e_y|) samples (each at most max_samples) on a
+// regular grid inside the new texel, each bilinear, averaged with equal weights. For an
+// integer downscale this is the exact area (box) filter (a 2x2 reduction averages four
+// texels exactly); at 1:1 or upscaling it is plain bilinear, so an identity re-bake is
+// exact. Sample points are clamped into the owning triangle, so nothing is read from
+// outside the source chart (the source's own gutter never bleeds in).
+//
+// Colour (sRGB-encoded) textures are filtered in linear light (decoded exactly through a
+// table, re-encoded with the sRGB formula): averaging encoded values darkens edges and
+// fine detail. Textures with alpha are filtered premultiplied (colour weighted by alpha,
+// then divided), so invisible texels do not tint visible ones; alpha itself is filtered
+// linearly and kept. Data textures (metallic-roughness, occlusion, ...) are filtered as
+// stored.
+//
+// Normal maps (tangent-space, glTF: +X right, +Y up in the image, i.e. toward -v): the
+// filtered vector n = 2 v - 1 has its xy rotated by the orthogonal polar factor of the
+// triangle's Jacobian old -> new, taken in texel units and conjugated by diag(1, -1) for
+// the v-down convention, then renormalized. This assumes square texels are square on the
+// surface (the true tangent frame would need 3-D positions); for conformal layouts it is
+// exact. When the Jacobian mirrors (det < 0) the factor is a reflection, which keeps xy
+// correct relative to the new u/v axes (tangents' handedness is then the caller's).
+//
+// Gutter: texels covered by no triangle are filled for the mip chain (atlas/gutter_fill.h):
+// a ring of the nearest chart texel's value, then each chart's colour extended through
+// every mip level, so bilinear and mip sampling at chart borders sees chart colours,
+// never background or (down to the level the gutter's width allows) a neighbour's.
 #include "atlas/rebake.h"
 
 #include "atlas/pack.h"

@@ -1,39 +1,10 @@
-// Re-baking a texture into new UVs (deterministic; the per-texel sampling on an engine).
-//
-// For every texel of the new image, the triangle that owns it is found among the new-UV
-// triangles that overlap the texel's square (conservative rasterization): the one whose
-// distance to the texel centre is smallest (0 when the centre is inside), ties to the
-// lowest triangle index (meshes in order). The texel's footprint is mapped to the old
-// texture by that triangle's affine map (barycentrics), and the old texture is sampled:
-//
-// Filter: box-filtered supersampling of bilinear samples. The new texel's square maps to a
-// parallelogram in old texels with edges J e_x and J e_y (J = d old texel / d new texel);
-// n_x = ceil(|J e_x|) by n_y = ceil(|J e_y|) samples (each at most max_samples) on a
-// regular grid inside the new texel, each bilinear, averaged with equal weights. For an
-// integer downscale this is the exact area (box) filter (a 2x2 reduction averages four
-// texels exactly); at 1:1 or upscaling it is plain bilinear, so an identity re-bake is
-// exact. Sample points are clamped into the owning triangle, so nothing is read from
-// outside the source chart (the source's own gutter never bleeds in).
-//
-// Colour (sRGB-encoded) textures are filtered in linear light (decoded exactly through a
-// table, re-encoded with the sRGB formula): averaging encoded values darkens edges and
-// fine detail. Textures with alpha are filtered premultiplied (colour weighted by alpha,
-// then divided), so invisible texels do not tint visible ones; alpha itself is filtered
-// linearly and kept. Data textures (metallic-roughness, occlusion, ...) are filtered as
-// stored.
-//
-// Normal maps (tangent-space, glTF: +X right, +Y up in the image, i.e. toward -v): the
-// filtered vector n = 2 v - 1 has its xy rotated by the orthogonal polar factor of the
-// triangle's Jacobian old -> new, taken in texel units and conjugated by diag(1, -1) for
-// the v-down convention, then renormalized. This assumes square texels are square on the
-// surface (the true tangent frame would need 3-D positions); for conformal layouts it is
-// exact. When the Jacobian mirrors (det < 0) the factor is a reflection, which keeps xy
-// correct relative to the new u/v axes (tangents' handedness is then the caller's).
-//
-// Gutter: texels covered by no triangle are filled for the mip chain (atlas/gutter_fill.h):
-// a ring of the nearest chart texel's value, then each chart's colour extended through
-// every mip level, so bilinear and mip sampling at chart borders sees chart colours,
-// never background or (down to the level the gutter's width allows) a neighbour's.
+// Re-baking a texture into new UVs: every texel of the new image takes the mean of bilinear
+// samples of the source over its footprint, mapped back through the triangle that owns it
+// (an area filter: exact at integer downscales, plain bilinear at 1:1 and above, so an
+// identity re-bake is exact). Colour is filtered in linear light, alpha premultiplied,
+// normal maps rotated with their chart; gutters are filled for the mip chain. UVs in glTF's
+// convention ([0,1], v down), sizes in texels. Deterministic; the per-texel sampling runs on
+// an engine. How texels are owned, filtered, converted and rotated: the top of rebake.cpp.
 #pragma once
 
 #include "atlas/gutter_fill.h"

@@ -1,3 +1,35 @@
+// The glTF rules checked on load (gltf_rules.h). Why and what:
+//
+// uvpress reads an asset's meshes (positions, indices, UVs, normals, tangents) and carries
+// everything else through unchanged, so an input's own errors reach the output. The full
+// validator is a Node program (tools/validate-gltf.mjs); a user's run cannot depend on it,
+// so this is a port of the subset that concerns buffers, accessors and mesh data, with the
+// validator's codes and its way of counting (one issue per reference where it counts per
+// reference), so that a count here is the count the validator prints for the same codes:
+//
+//   buffers      BUFFER_VIEW_TOO_LONG                      per bufferView
+//   accessors    ACCESSOR_OFFSET_ALIGNMENT, ACCESSOR_TOTAL_OFFSET_ALIGNMENT,
+//                ACCESSOR_TOO_LONG                         per accessor
+//   byteStride   ANIMATION_SAMPLER_ACCESSOR_WITH_BYTESTRIDE per sampler input/output,
+//                SKIN_IBM_ACCESSOR_WITH_BYTESTRIDE          per skin,
+//                MESH_PRIMITIVE_INDICES_ACCESSOR_WITH_BYTESTRIDE per primitive,
+//                MESH_PRIMITIVE_ACCESSOR_WITHOUT_BYTESTRIDE per further attribute accessor
+//                                                           sharing a view without a stride
+//   primitives   MESH_PRIMITIVE_UNEQUAL_ACCESSOR_COUNT      per primitive,
+//                ACCESSOR_INDEX_OOB, ACCESSOR_INDEX_PRIMITIVE_RESTART
+//                                                           per index value and primitive
+//   values       ACCESSOR_INVALID_FLOAT                     per non-finite component,
+//                ACCESSOR_MIN_MISMATCH, ACCESSOR_MAX_MISMATCH,
+//                ACCESSOR_ELEMENT_OUT_OF_MIN_BOUND, ACCESSOR_ELEMENT_OUT_OF_MAX_BOUND
+//                                                           per component of an accessor's min/max,
+//                ACCESSOR_VECTOR3_NON_UNIT (NORMAL, TANGENT xyz; | |v| - 1 | > 0.00674),
+//                ACCESSOR_INVALID_SIGN (TANGENT w not +-1)  per element and primitive
+//
+// Values are compared as the validator does: float components in single precision
+// (declared bounds rounded to float), integer ones as stored (normalized or not), a NaN
+// making its component's actual bounds NaN. Value checks skip sparse accessors, matrices
+// of 1- or 2-byte components (column padding) and accessors that do not fit their view
+// (that is reported once, as ACCESSOR_TOO_LONG).
 #include "io/gltf_rules.h"
 
 #include <algorithm>

@@ -1,36 +1,9 @@
-// The Khronos glTF validator's rules that matter to uvpress, checked on load.
-//
-// uvpress reads an asset's meshes (positions, indices, UVs, normals, tangents) and carries
-// everything else through unchanged, so an input's own errors reach the output. The full
-// validator is a Node program (tools/validate-gltf.mjs); a user's run cannot depend on it,
-// so this is a port of the subset that concerns buffers, accessors and mesh data, with the
-// validator's codes and its way of counting (one issue per reference where it counts per
-// reference), so that a count here is the count the validator prints for the same codes:
-//
-//   buffers      BUFFER_VIEW_TOO_LONG                      per bufferView
-//   accessors    ACCESSOR_OFFSET_ALIGNMENT, ACCESSOR_TOTAL_OFFSET_ALIGNMENT,
-//                ACCESSOR_TOO_LONG                         per accessor
-//   byteStride   ANIMATION_SAMPLER_ACCESSOR_WITH_BYTESTRIDE per sampler input/output,
-//                SKIN_IBM_ACCESSOR_WITH_BYTESTRIDE          per skin,
-//                MESH_PRIMITIVE_INDICES_ACCESSOR_WITH_BYTESTRIDE per primitive,
-//                MESH_PRIMITIVE_ACCESSOR_WITHOUT_BYTESTRIDE per further attribute accessor
-//                                                           sharing a view without a stride
-//   primitives   MESH_PRIMITIVE_UNEQUAL_ACCESSOR_COUNT      per primitive,
-//                ACCESSOR_INDEX_OOB, ACCESSOR_INDEX_PRIMITIVE_RESTART
-//                                                           per index value and primitive
-//   values       ACCESSOR_INVALID_FLOAT                     per non-finite component,
-//                ACCESSOR_MIN_MISMATCH, ACCESSOR_MAX_MISMATCH,
-//                ACCESSOR_ELEMENT_OUT_OF_MIN_BOUND, ACCESSOR_ELEMENT_OUT_OF_MAX_BOUND
-//                                                           per component of an accessor's min/max,
-//                ACCESSOR_VECTOR3_NON_UNIT (NORMAL, TANGENT xyz; | |v| - 1 | > 0.00674),
-//                ACCESSOR_INVALID_SIGN (TANGENT w not +-1)  per element and primitive
-//
-// Values are compared as the validator does: float components in single precision
-// (declared bounds rounded to float), integer ones as stored (normalized or not), a NaN
-// making its component's actual bounds NaN. Value checks skip sparse accessors, matrices
-// of 1- or 2-byte components (column padding) and accessors that do not fit their view
-// (that is reported once, as ACCESSOR_TOO_LONG). Every read is bounds-checked: a malformed
-// asset gives issues, never a crash.
+// The Khronos glTF validator's rules that matter to uvpress, checked on load: a port of the
+// validator's subset on buffers, accessors and mesh data (tools/validate-gltf.mjs runs the
+// full one), with its codes (rule_codes()) and its way of counting, so that a count here is
+// the count the validator prints for the same codes. Every read is bounds-checked: a
+// malformed asset gives issues, never a crash. Why a port, which codes are counted per what,
+// and how values are compared: the top of gltf_rules.cpp.
 #pragma once
 
 #include "io/gltf_io.h"
@@ -50,10 +23,10 @@ struct RuleIssue {
   std::string message;
 };
 
-// Every issue of the subset above in `file` (all of them errors in the validator).
+// Every issue of the subset in `file` (all of them errors in the validator).
 std::vector<RuleIssue> check_rules(const GltfFile& file);
 
-// The codes check_rules reports, as listed above.
+// The codes check_rules reports (listed, with what each counts, at the top of gltf_rules.cpp).
 const std::vector<std::string>& rule_codes();
 
 // Issues per code, in code order.

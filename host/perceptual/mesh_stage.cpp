@@ -1,3 +1,41 @@
+// The mesh-wise stage (mesh_stage.h). How:
+//
+// Local step (per triangle, closed forms): for every k in 0..3, two exact block updates
+//   R = polar(w_R R-bar R(k pi/2) + w_rs J S^T)              (exact minimizer of eq. 25)
+//   S = (w_S S-bar + w_rs sym(R^T J)) / (w_S + w_rs)           (eq. 26, S^T = S)
+// and the k with the lowest energy of eq. 19 is kept; a triangle keeps its current
+// (k, R, S) unless the candidate is strictly better, so the local step never raises eq. 19.
+// (The paper picks k by |J - R-bar R(k pi/2)|; with w_rs << w_R, w_S the energy picks by
+// |J - R-bar R(k pi/2) S-bar|, the same idea with the stretch included.)
+//
+// Global step: eq. 27, sum w_rs |J_i - R_i S_i|^2 + w_b sum B(det J_i), with the barrier of
+// Schueller et al. 2013: B(x) = 1/g(x/s_i) - 1, g(u) = 1 - (1-u)^3, for 0 < x < s_i, 0 for
+// x >= s_i (C2), +inf for x <= 0, threshold s_i = barrier_threshold * det S-bar_i. Damped
+// Newton: exact Hessian of the fit term, barrier Hessian B'' cof cof^T + |B'| P_anti (its
+// indefinite part B' Hess(det) clamped to PSD), on the fixed pattern of
+// solve::SparseSystem (vertex 0 pinned: the translation null space), then the maximal
+// non-inverting step and Armijo backtracking (solve::max_injective_step, solve::armijo).
+// The fit term's matrix depends on the input UVs only and is factorized once per chart:
+// with no active barrier the Newton step is one solve with it (exact); with a few active
+// barriers, PCG preconditioned by it; with more, a numeric refactorization of the full
+// Hessian. After each global step, w_b /= 20 when w_rs E_rs < w_b E_barrier (eq. 28).
+// The objective eq. 19 + w_b E_barrier never increases from one iteration to the next.
+// With weak stretch weights and rotation targets that disagree with the neighbours', the
+// formulation itself favours shrinking a triangle (|J - R S| -> 0 as J, S -> 0; the paper's
+// "triangles approach degeneration"): the barrier is what keeps those from collapsing.
+//
+// Weights: w_R, w_S are floored at max(weight_floor, weight_floor_relative * mean weight of
+// the chart); non-finite or negative weights count as 0. Nothing here becomes singular at
+// w = 0 (the global matrix is w_rs times a Laplacian-like matrix plus a PSD barrier), the
+// floor only keeps flat-signal triangles (w ~ 1e-16) from being pure followers. Note that
+// the pull of a triangle toward its target per local-global iteration is about
+// w / (w + w_rs): weights far below w_rs converge slowly (see max_iterations).
+//
+// Triangles whose input UV area is not positive (2A <= 1e-12 * longest edge^2, or clockwise)
+// have no Jacobian: they are "passive" - no energy, no barrier, not checked for flips - and
+// their vertices move with the rest. Charts should be one connected piece (only vertex 0 is
+// pinned). Deterministic: per-triangle loops are OpenMP static with fixed-order sums, and
+// CHOLMOD runs with BLAS on one thread (solve::configure_blas_threads).
 #include "perceptual/mesh_stage.h"
 
 #include "core/mat2.h"

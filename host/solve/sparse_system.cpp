@@ -1,3 +1,30 @@
+// The sparse system of a Newton-type step (sparse_system.h). How:
+//
+// Assembly is a gather, not a scatter: for every stored nonzero, the list of per-triangle
+// Hessian entries that add into it, in triangle order. Parallel over nonzeros, and the
+// sums come out bit-identical whatever the thread count. Same for the gradient, per vertex.
+//
+// Factorization reuse: H changes slowly from one iteration to the next, and at 10^4-10^6
+// faces its numeric factorization is nearly the whole cost of a step (camelhead-s2: 87 %).
+// solve_reusing() therefore solves with preconditioned conjugate gradients, the
+// preconditioner being the factor of an earlier H, and refactorizes only when PCG does not
+// reach its tolerance within a budget of iterations that costs a fraction of one
+// factorization. A PCG iteration is a pair of triangular solves, memory-bound: a
+// factorization costs only 10-13 of them, so the gain is bounded (docs/DEVELOPERS.md,
+// "flatten at scale"). The budget is fixed from CHOLMOD's flop and fill counts at analysis time, not
+// from timings, so the sequence of factorizations and PCG iterations - and every bit of
+// the result - is the same on every machine and for every thread count. Small meshes get
+// a budget of 0: a factorization there costs a few solves, and the direct path is kept bit
+// for bit.
+//
+// Translation null space: E is invariant under translating all UVs, so H has the two
+// translations in its kernel (and grad E is orthogonal to them). Vertex 0 is pinned: its
+// two rows and columns are replaced by the identity (scaled to the mean diagonal) and its
+// right-hand side by 0. The solution of the pinned system is the minimum of the quadratic
+// model among steps that leave vertex 0 in place - exactly the unpinned solution up to a
+// translation, so the step is unchanged. A diagonal shift of 1e-10 x the mean diagonal on
+// top guards against other (numerically) singular modes of the CM proxy, where dropping
+// the alpha term can leave a triangle's rotation direction without curvature.
 #include "solve/sparse_system.h"
 
 #include "core/parallel.h"

@@ -1,34 +1,13 @@
 // The 2V x 2V linear system of one Newton-type step, H d = -grad E (flatten's SLIM and CM
-// steps, the mesh stage's damped Newton step), u and v coupled
-// (dof 2i = u_i, 2i+1 = v_i). The sparsity pattern depends on the connectivity only, so it
-// is built, and CHOLMOD's symbolic analysis (ordering, supernodes) done, once per mesh;
-// every iteration then assembles values into the fixed pattern and refactorizes
-// numerically (supernodal LLT on OpenBLAS) or reuses an earlier factor (below).
-//
-// Assembly is a gather, not a scatter: for every stored nonzero, the list of per-triangle
-// Hessian entries that add into it, in triangle order. Parallel over nonzeros, and the
-// sums come out bit-identical whatever the thread count. Same for the gradient, per vertex.
-//
-// Factorization reuse: H changes slowly from one iteration to the next, and at 10^4-10^6
-// faces its numeric factorization is nearly the whole cost of a step (camelhead-s2: 87 %).
-// solve_reusing() therefore solves with preconditioned conjugate gradients, the
-// preconditioner being the factor of an earlier H, and refactorizes only when PCG does not
-// reach its tolerance within a budget of iterations that costs a fraction of one
-// factorization. A PCG iteration is a pair of triangular solves, memory-bound: a
-// factorization costs only 10-13 of them, so the gain is bounded (README, "flatten at
-// scale"). The budget is fixed from CHOLMOD's flop and fill counts at analysis time, not
-// from timings, so the sequence of factorizations and PCG iterations - and every bit of
-// the result - is the same on every machine and for every thread count. Small meshes get a budget of 0: a factorization
-// there costs a few solves, and the direct path is kept bit for bit.
-//
-// Translation null space: E is invariant under translating all UVs, so H has the two
-// translations in its kernel (and grad E is orthogonal to them). Vertex 0 is pinned: its
-// two rows and columns are replaced by the identity (scaled to the mean diagonal) and its
-// right-hand side by 0. The solution of the pinned system is the minimum of the quadratic
-// model among steps that leave vertex 0 in place - exactly the unpinned solution up to a
-// translation, so the step is unchanged. A diagonal shift of 1e-10 x the mean diagonal on
-// top guards against other (numerically) singular modes of the CM proxy, where dropping
-// the alpha term can leave a triangle's rotation direction without curvature.
+// steps, the mesh stage's damped Newton step), u and v coupled (dof 2i = u_i, 2i+1 = v_i).
+// The sparsity pattern depends on the connectivity only, so it is built, and CHOLMOD's
+// symbolic analysis (ordering, supernodes) done, once per mesh; every iteration then
+// assembles values into the fixed pattern and refactorizes numerically (supernodal LLT on
+// OpenBLAS) or runs PCG on an earlier factor (solve_reusing). Vertex 0 is pinned (the
+// translation null space), which leaves the step unchanged. The result is bit-identical
+// whatever the OpenMP thread count (BLAS threads: configure_blas_threads, below). How
+// assembly, factorization reuse and the pinning work, with measurements: the top of
+// sparse_system.cpp.
 #pragma once
 
 #include "solve/pcg.h"

@@ -1,7 +1,7 @@
 // The glTF rules checked on load (io/gltf_rules.h) against the Khronos validator itself: on
 // assets broken one way at a time and on the shared assets, every code of the subset is
-// counted as the validator counts it. And what a user sees: one warning, or a refusal
-// under --strict.
+// counted as the validator counts it. What a user sees (one warning, or a refusal under
+// --strict): tests/cli/test_gltf_rules.cpp.
 #include "support.h"
 
 #include "io/gltf_append.h"
@@ -13,7 +13,6 @@
 
 #include <cmath>
 #include <cstring>
-#include <fstream>
 #include <functional>
 
 using namespace uvpress;
@@ -168,36 +167,4 @@ TEST_CASE("check_rules agrees with the Khronos validator on the shared assets", 
   }
   // Fox's own errors (126 animation accessors and 1 skin in strided views) are found.
   CHECK(total >= 127);
-}
-
-TEST_CASE("An input that breaks the rules is one warning, or refused under --strict", "[io][gltf][rules][cli]") {
-  test::Scratch dir("gltf_rules_cli");
-  io::GltfFile file = pipeline::make_demo_asset({8, 32});
-  const tinygltf::Primitive prim = file.model.meshes[0].primitives[0];
-  file.model.accessors[size_t(prim.attributes.at("TEXCOORD_0"))].maxValues = {1.5, 1.5};  // above every value
-  const fs::path in = dir / "in.gltf";
-  io::save_gltf(file, in.string());
-
-  const auto r = test::run_uvpress("copy " + in.string() + " -o " + (dir / "out.glb").string() + " --report " +
-                                   (dir / "out.json").string());
-  REQUIRE(r.exit_code == 0);
-  const auto lines = r.err_lines();
-  REQUIRE(lines.size() == 1);
-  CHECK(lines[0].find(in.string() + ": warning: 2 glTF validation errors") != std::string::npos);
-  CHECK(lines[0].find("ACCESSOR_MAX_MISMATCH") != std::string::npos);
-  std::ifstream report((dir / "out.json").string());
-  const nlohmann::json j = nlohmann::json::parse(report);
-  CHECK(j["input_validation"]["errors"] == 2);
-  CHECK(j["input_validation"]["codes"]["ACCESSOR_MAX_MISMATCH"] == 2);
-
-  // A valid input: no warning, zero errors in the report.
-  const fs::path ok = dir / "ok.gltf";
-  io::save_gltf(pipeline::make_demo_asset({8, 32}), ok.string());
-  const auto clean = test::run_uvpress("--strict copy " + ok.string() + " -o " + (dir / "ok.glb").string());
-  CHECK(clean.exit_code == 0);
-  CHECK(clean.err.empty());
-
-  test::Scratch out("gltf_rules_strict");
-  test::check_input_error(out, "--strict copy " + in.string() + " -o " + (out / "x.glb").string(), in,
-                          "2 glTF validation errors (2 ACCESSOR_MAX_MISMATCH): refused (--strict)");
 }
