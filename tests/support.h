@@ -40,6 +40,9 @@ struct RunResult {
   std::vector<std::string> err_lines() const;
 };
 
+// `p` as one shell word for run_uvpress (single-quoted; test paths hold no quote).
+inline std::string quoted(const fs::path& p) { return "'" + p.string() + "'"; }
+
 // Runs the uvpress binary with `args` (shell words, already quoted as needed).
 RunResult run_uvpress(const std::string& args);
 // Runs a shell command (sh -c) with stdout and stderr captured.

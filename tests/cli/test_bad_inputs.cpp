@@ -15,7 +15,7 @@ using test::run_uvpress;
 
 namespace {
 
-std::string quoted(const test::fs::path& p) { return "'" + p.string() + "'"; }
+using test::quoted;
 
 std::vector<std::string> entries(const test::fs::path& dir) {
   std::vector<std::string> out;

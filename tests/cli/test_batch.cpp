@@ -29,7 +29,7 @@ using json = nlohmann::json;
 
 namespace {
 
-std::string quoted(const test::fs::path& p) { return "'" + p.string() + "'"; }
+using test::quoted;
 
 json read_json(const test::fs::path& p) { return json::parse(std::ifstream(p)); }
 

@@ -17,7 +17,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-std::string quoted(const test::fs::path& p) { return "'" + p.string() + "'"; }
+using test::quoted;
 
 
 }  // namespace

@@ -21,7 +21,7 @@ using test::run_uvpress;
 
 namespace {
 
-std::string quoted(const test::fs::path& p) { return "'" + p.string() + "'"; }
+using test::quoted;
 
 // An n x n grid with a bump, as OBJ text; `skip` leaves out faces (to make holes).
 std::string grid_obj(int n, const std::vector<int>& skip = {}) {

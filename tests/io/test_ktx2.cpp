@@ -24,7 +24,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-std::string quoted(const fs::path& p) { return "'" + p.string() + "'"; }
+using test::quoted;
 
 // Runs a shell command; stdout, and the exit code in *code.
 std::string shell(const std::string& command, int* code) {
