@@ -60,6 +60,31 @@ io::GltfFile noise_asset(uint32_t side, int grid = 4) {
   return f;
 }
 
+// The demo sheet (grid x grid quads, a 128^2 texture) as render_mesh takes it: its
+// luminance texture and eval's 20 cameras.
+struct DemoViews {
+  io::GltfFile file;
+  io::Asset asset;
+  Image tex;
+  std::vector<float> y;
+  std::vector<std::array<float, 16>> cameras;
+  explicit DemoViews(int grid)
+      : file(pipeline::make_demo_asset({grid, 128})), asset(io::build_asset(file)),
+        tex(io::decode_image(file.image_bytes[0], "demo")), y(luminance_plane(tex)) {
+    const auto& p = asset.primitives.at(0);
+    cameras = eval::dodecahedron_cameras(p.positions.data(), p.vertex_count());
+  }
+  engine::MeshRenderDesc desc() const {
+    const auto& p = asset.primitives.at(0);
+    engine::MeshRenderDesc d;
+    d.positions = p.positions.data(), d.vertex_count = p.vertex_count();
+    d.indices = p.indices.data(), d.triangle_count = p.triangle_count();
+    d.uvs = p.uv_sets[0].uv.data();
+    d.texture = y.data(), d.texture_width = tex.width, d.texture_height = tex.height;
+    return d;
+  }
+};
+
 }  // namespace
 
 TEST_CASE("render_mesh trilinear: the level of detail is log2 of the texel footprint, blended between levels",
@@ -179,17 +204,9 @@ TEST_CASE("render_mesh: Vulkan (lavapipe, validation on) matches the CPU oracle 
 TEST_CASE("render_mesh: a view rendered as 2 x 2 tiles is the whole view, triangles past the guard band are clipped",
           "[eval][engine]") {
   auto cpu = engine::make_cpu_engine({});
-  io::GltfFile file = pipeline::make_demo_asset({2, 128});  // 8 large triangles: most cross tile borders
-  const io::Asset asset = io::build_asset(file);
-  const Image tex = io::decode_image(file.image_bytes[0], "demo");
-  const auto y = luminance_plane(tex);
-  const auto& p = asset.primitives.at(0);
-  const auto cams = eval::dodecahedron_cameras(p.positions.data(), p.vertex_count());
-  engine::MeshRenderDesc d;
-  d.positions = p.positions.data(), d.vertex_count = p.vertex_count();
-  d.indices = p.indices.data(), d.triangle_count = p.triangle_count();
-  d.uvs = p.uv_sets[0].uv.data();
-  d.texture = y.data(), d.texture_width = tex.width, d.texture_height = tex.height;
+  const DemoViews demo(2);  // 8 large triangles: most cross tile borders
+  const auto& cams = demo.cameras;
+  engine::MeshRenderDesc d = demo.desc();
   d.width = d.height = 1024;
   d.cameras = {cams[0], cams[7]};
   const auto whole = cpu->render_mesh(d);
@@ -290,17 +307,9 @@ TEST_CASE("eval: a window camera renders exactly its part of the whole view", "[
   // A window neither square nor on a tile grid: pixel (i, j) of its render must be pixel
   // (x0 + i, y0 + j) of the whole view's.
   auto cpu = engine::make_cpu_engine({});
-  io::GltfFile file = pipeline::make_demo_asset({4, 128});
-  const io::Asset asset = io::build_asset(file);
-  const Image tex = io::decode_image(file.image_bytes[0], "demo");
-  const auto y = luminance_plane(tex);
-  const auto& p = asset.primitives.at(0);
-  const auto cams = eval::dodecahedron_cameras(p.positions.data(), p.vertex_count());
-  engine::MeshRenderDesc d;
-  d.positions = p.positions.data(), d.vertex_count = p.vertex_count();
-  d.indices = p.indices.data(), d.triangle_count = p.triangle_count();
-  d.uvs = p.uv_sets[0].uv.data();
-  d.texture = y.data(), d.texture_width = tex.width, d.texture_height = tex.height;
+  const DemoViews demo(4);
+  const auto& cams = demo.cameras;
+  engine::MeshRenderDesc d = demo.desc();
   const uint32_t side = 600, x0 = 137, y0 = 201, w = 250, h = 130;
   d.width = d.height = side;
   d.cameras = {cams[3]};
