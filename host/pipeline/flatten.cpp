@@ -307,16 +307,16 @@ AssignResult flatten_assign(io::GltfFile& file, engine::Engine& engine, double c
   size_t layouts = 0;
   std::set<int> tex_coords;  // the UV sets replaced
   for (const auto& l : a.reparam.layouts) {
-    if (!l.contains("isometric")) continue;
+    if (!l.isometric) continue;
     ++layouts;
-    a.flattened += l["isometric"]["charts_flattened"].get<size_t>(), a.kept += l["isometric"]["charts_kept"].get<size_t>();
-    a.holes += l["isometric"]["holes_filled"].get<size_t>();
-    for (const auto& s : l["uv_sets"]) tex_coords.insert(s["tex_coord"].get<int>());
+    a.flattened += l.isometric->charts_flattened, a.kept += l.isometric->charts_kept;
+    a.holes += l.isometric->holes_filled;
+    for (const auto& s : l.uv_sets) tex_coords.insert(s.tex_coord);
   }
   if (layouts == 0) {  // before any warning: one error line
     std::string why;
     for (const auto& l : a.reparam.layouts)
-      if (l.contains("untouched")) why += (why.empty() ? "" : "; ") + l["untouched"].get<std::string>();
+      if (l.untouched) why += (why.empty() ? "" : "; ") + *l.untouched;
     throw InputError(file.path, "--assign: no textured layout to flatten" + (why.empty() ? std::string() : ": " + why));
   }
   for (int t : tex_coords) a.uv_sets += (a.uv_sets.empty() ? "TEXCOORD_" : ", TEXCOORD_") + std::to_string(t);

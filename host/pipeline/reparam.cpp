@@ -61,28 +61,27 @@ struct TriangleCounts {
   std::vector<double> infeasible_identity_gmsd, lambda_area;
   std::vector<double> rate_epsilons;  // per triangle under rate control (empty: the fixed epsilon)
 
-  json to_json(const perceptual::TriangleStageOptions& t) const {
-    json eps = t.epsilon;
+  TriangleStageReport report(const perceptual::TriangleStageOptions& t) const {
+    TriangleStageReport r;
+    r.epsilon = t.epsilon;
     if (!rate_epsilons.empty())
-      eps = {{"rule", "rate control: max(margin * loss under the resize to the requested cost, floor)"},
-             {"quartiles", {quantile(rate_epsilons, 0.25), quantile(rate_epsilons, 0.5), quantile(rate_epsilons, 0.75)}},
-             {"max", quantile(rate_epsilons, 1.0)}};
-    json j = {{"epsilon", eps},
-              {"evaluations", t.evaluations},
-              {"early_stop", t.early_stop},
-              {"view_size", t.view_size},
-              {"triangles", optimized},
-              {"feasible", feasible},
-              {"infeasible", optimized - feasible},
-              {"views_resolve_texels", resolved},
-              {"sampled_by_patches", sampled},
-              {"tiles_coarsened", coarsened},
-              {"lambda_area_quartiles",
-               {quantile(lambda_area, 0.25), quantile(lambda_area, 0.5), quantile(lambda_area, 0.75)}}};
+      r.rate_control = TriangleStageReport::RateControl{
+          {quantile(rate_epsilons, 0.25), quantile(rate_epsilons, 0.5), quantile(rate_epsilons, 0.75)},
+          quantile(rate_epsilons, 1.0)};
+    r.evaluations = t.evaluations;
+    r.early_stop = t.early_stop;
+    r.view_size = t.view_size;
+    r.triangles = optimized;
+    r.feasible = feasible;
+    r.infeasible = optimized - feasible;
+    r.views_resolve_texels = resolved;
+    r.sampled_by_patches = sampled;
+    r.tiles_coarsened = coarsened;
+    r.lambda_area_quartiles = {quantile(lambda_area, 0.25), quantile(lambda_area, 0.5), quantile(lambda_area, 0.75)};
     if (!infeasible_identity_gmsd.empty())
-      j["infeasible_identity_gmsd"] = {{"median", quantile(infeasible_identity_gmsd, 0.5)},
-                                       {"max", quantile(infeasible_identity_gmsd, 1.0)}};
-    return j;
+      r.infeasible_identity_gmsd = TriangleStageReport::IdentityGmsd{quantile(infeasible_identity_gmsd, 0.5),
+                                                                     quantile(infeasible_identity_gmsd, 1.0)};
+    return r;
   }
 };
 
@@ -163,7 +162,7 @@ struct Prepared {
   // The equal-slope allocation at the requested cost (perceptual/rate_allocation.h): per UV
   // set and triangle its isotropic scale (empty: not computed), and its figures.
   std::vector<std::vector<double>> equal_slope;
-  json equal_slope_report;
+  EqualSlopeReport equal_slope_report;
   double old_used = 0;  // eq. 20: source texels under the input's charts
   size_t rigid = 0;
   TriangleCounts tri;
@@ -365,8 +364,8 @@ struct Candidate {
 // What one candidate came to, in the output file it was written into.
 struct Realized {
   std::string name;
-  json layouts;                      // by layout index (untouched ones as they are)
-  json textures = json::array();
+  std::vector<LayoutReport> layouts;  // by layout index (untouched ones as they are)
+  std::vector<TextureReport> textures;
   double old_texels = 0, new_texels = 0;
   size_t flips = 0, charts = 0, mesh_failed = 0;
   size_t overlaps_new = 0;           // triangle pairs overlapping in the written UVs, not in the input's
@@ -488,8 +487,8 @@ bool unit_scales_differ(const Prepared& P, double c) {
 // Builds one candidate into `file` (a copy of the input): mesh stage per chart, packing
 // into the budget, re-bake of every image of every prepared layout, new UV accessors.
 Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, const std::vector<Prepared>& prepared,
-                 const json& layout_base, io::GltfFile& file, engine::Engine& engine, const ReparamOptions& o,
-                 const Candidate& cand, const Progress& progress, json& warnings) {
+                 const std::vector<LayoutReport>& layout_base, io::GltfFile& file, engine::Engine& engine,
+                 const ReparamOptions& o, const Candidate& cand, const Progress& progress, json& warnings) {
   Realized out;
   out.name = cand.name;
   out.layouts = layout_base;
@@ -498,18 +497,16 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
     const Layout& L = layouts[li];
     const std::vector<Chart>& charts = P.charts;
     const double W = P.W, H = P.H;
-    json& jl = out.layouts[li];
+    LayoutReport& lr = out.layouts[li];
     size_t layout_flips = 0, mesh_failed = 0, overlap_fallback_pairs = 0, outline_kept = 0, outline_failed = 0;
     const bool slope = cand.equal_slope && !P.equal_slope.empty();
-    if (slope) jl["equal_slope"] = P.equal_slope_report;
+    if (slope) lr.equal_slope = P.equal_slope_report;
     UnitScales unit_scales;
     if (cand.unit_scale && !P.unit_loss.loss.empty()) {
       unit_scales = unit_scales_filling(P, asset, L, o, cand);
       const auto& k = unit_scales.scale;
-      jl["unit_scale"] = {{"cost", unit_scales.cost},
-                          {"units", k.size()},
-                          {"scale_quartiles", {quantile(k, 0.25), quantile(k, 0.5), quantile(k, 0.75)}},
-                          {"scale_min", *std::min_element(k.begin(), k.end())}};
+      lr.unit_scale = UnitScaleReport{unit_scales.cost, k.size(), {quantile(k, 0.25), quantile(k, 0.5), quantile(k, 0.75)},
+                                      *std::min_element(k.begin(), k.end())};
     }
     double outline_blend = 0;
 
@@ -537,10 +534,7 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
     if (isometric) {
       new_uv_of = P.isometric.uv;
       const size_t flat = size_t(std::count(P.isometric.flattened.begin(), P.isometric.flattened.end(), 1));
-      jl["isometric"] = {{"charts_flattened", flat},
-                         {"charts_kept", charts.size() - flat},
-                         {"holes_filled", P.isometric.filled_holes},
-                         {"texels_per_area", P.isometric.texels_per_area}};
+      lr.isometric = IsometricReport{flat, charts.size() - flat, P.isometric.filled_holes, P.isometric.texels_per_area};
     }
     const std::string mesh_stage = "mesh stage (" + cand.name + ", layout " + std::to_string(li) + ")";
     if (progress && cand.reshape && !isometric) progress(mesh_stage, 0, charts.size());
@@ -754,7 +748,7 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
       }
     }
     out.t_pack += t0.seconds();
-    jl["pack_seconds"] = t0.seconds();
+    lr.pack_seconds = t0.seconds();
 
     // The invariant, on the UVs as written: no two triangles of the layout overlap unless
     // they did in the input. The packer keeps its units' footprints apart and a unit's
@@ -844,13 +838,14 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
       file.image_bytes[size_t(i)] = io::encode_image(baked, io::encode_settings_of(old_bytes));
       out.old_texels += double(source.width) * source.height;
       out.new_texels += double(baked.width) * baked.height;
-      out.textures.push_back({{"image", i},
-                              {"name", img.name},
-                              {"role", img.uses.empty() ? "other" : io::to_string(img.uses.front().role)},
-                              {"old_size", {source.width, source.height}},
-                              {"new_size", {baked.width, baked.height}},
-                              {"old_bytes", old_bytes.size()},
-                              {"new_bytes", file.image_bytes[size_t(i)].size()}});
+      TextureReport& t = out.textures.emplace_back();
+      t.image = i;
+      t.name = img.name;
+      t.role = img.uses.empty() ? "other" : io::to_string(img.uses.front().role);
+      t.old_size = {source.width, source.height};
+      t.new_size = {baked.width, baked.height};
+      t.old_bytes = old_bytes.size();
+      t.new_bytes = file.image_bytes[size_t(i)].size();
       if (progress) progress(bake_stage, ++baked_count, L.images.size());
     }
     out.t_bake += t0.seconds();
@@ -866,34 +861,32 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
     out.mesh_failed += mesh_failed;
     out.overlaps_new += overlaps_new;
     out.overlap_fallback_charts += overlapped.size();
-    jl["charts"] = charts.size();
-    jl["rigid_charts"] = P.rigid;
-    jl["shared_texel_charts"] = P.shared_charts;  // packed with the charts they share texels with, unreshaped
-    jl["packing_units"] = units.size();
-    jl["exact_units"] = size_t(std::count(unit_exact.begin(), unit_exact.end(), 1));  // texels copied, not resampled
-    jl["exact_texels"] = exact_texels;
-    jl["atlas"] = {packing.width, packing.height};
-    jl["scale"] = packing.scale;
-    jl["scale_cap"] = s_max;  // the source density of the densest triangles
-    jl["capped_at_source_density"] = packing.scale >= 0.999 * s_max;
-    jl["packing_efficiency"] = packing.efficiency;   // share of the image's texels under charts
-    jl["gutter"] = gutter;                            // texels between charts
-    jl["edge_gutter"] = {budget.pack.edge_x, budget.pack.edge_y};  // texels at the left/right and top/bottom edges
-    jl["gutter_texels"] = packing.gutter_texels;      // texels kept empty around charts and at the edges
-    jl["chart_cost_ratio"] = choice.cost_ratio;
-    jl["flips"] = layout_flips;
-    jl["overlaps_new"] = overlaps_new;                      // triangle pairs; 0, or the layout is not written
-    jl["overlap_fallback_charts"] = overlapped.size();      // reshaped charts that ran over themselves: input shape
-    jl["overlap_fallback_pairs"] = overlap_fallback_pairs;  // the new overlapping pairs they would have had
+    lr.charts = charts.size();
+    lr.rigid_charts = P.rigid;
+    lr.shared_texel_charts = P.shared_charts;
+    lr.packing_units = units.size();
+    lr.exact_units = size_t(std::count(unit_exact.begin(), unit_exact.end(), 1));
+    lr.exact_texels = exact_texels;
+    lr.atlas = {packing.width, packing.height};
+    lr.scale = packing.scale;
+    lr.scale_cap = s_max;
+    lr.capped_at_source_density = packing.scale >= 0.999 * s_max;
+    lr.packing_efficiency = packing.efficiency;
+    lr.gutter = gutter;
+    lr.edge_gutter = {budget.pack.edge_x, budget.pack.edge_y};
+    lr.gutter_texels = packing.gutter_texels;
+    lr.chart_cost_ratio = choice.cost_ratio;
+    lr.flips = layout_flips;
+    lr.overlaps_new = overlaps_new;
+    lr.overlap_fallback_charts = overlapped.size();
+    lr.overlap_fallback_pairs = overlap_fallback_pairs;
     if (cand.outline)
-      jl["outline"] = {{"kept", outline_kept},    // reshaped charts re-embedded in their input outline
-                       {"failed", outline_failed},  // ... where that folded or overlapped: the mesh stage's shape
-                       {"mean_blend", outline_kept ? outline_blend / double(outline_kept) : 0.0}};
+      lr.outline = OutlineReport{outline_kept, outline_failed, outline_kept ? outline_blend / double(outline_kept) : 0.0};
     if (!P.results.empty() && o.optimize) {
-      jl["mesh_stage_failed_charts"] = mesh_failed;
+      lr.mesh_stage_failed_charts = mesh_failed;
       if (mesh_failed > 1)
         warnings.push_back(cand.name + ": layout " + std::to_string(li) + ": the mesh stage failed on " + std::to_string(mesh_failed) + " charts (kept unreshaped)");
-      jl["triangle_stage"] = P.tri.to_json(o.triangle);
+      lr.triangle_stage = P.tri.report(o.triangle);
     }
   }
   return out;
@@ -923,7 +916,7 @@ struct Run {
   const Progress& progress;
   io::Asset asset;
   std::vector<Layout> layouts;
-  json layout_base = json::array();  // per layout: images, driver, UV sets (untouched ones as found)
+  std::vector<LayoutReport> layout_base;  // per layout: images, driver, UV sets (untouched ones as found)
   std::vector<Prepared> prepared;    // the layouts reparam changes
   json warnings = json::array();
   size_t optimized = 0, infeasible = 0;  // triangles through the triangle stage, those kept at the identity
@@ -1081,10 +1074,8 @@ void allocate_equal_slope(Run& run, const Layout& L, Prepared& P, const std::vec
     P.equal_slope.resize(L.uv_sets.size());
     for (size_t si = 0; si < L.uv_sets.size(); ++si) P.equal_slope[si].assign(P.results[si].size(), 1.0);
     for (size_t k = 0; k < where.size(); ++k) P.equal_slope[where[k].first][where[k].second] = alloc.scale[k];
-    P.equal_slope_report = {{"cost", cost},  // share of the source's texels under the triangles
-                            {"spent", alloc.spent},
-                            {"multiplier", alloc.multiplier},
-                            {"scale_quartiles", {quantile(alloc.scale, 0.25), quantile(alloc.scale, 0.5), quantile(alloc.scale, 0.75)}}};
+    P.equal_slope_report = {cost, alloc.spent, alloc.multiplier,
+                            {quantile(alloc.scale, 0.25), quantile(alloc.scale, 0.5), quantile(alloc.scale, 0.75)}};
     run.t_triangle += t0.seconds();
   }
 }
@@ -1099,19 +1090,19 @@ void prepare_layout(Run& run, size_t li) {
   json& warnings = run.warnings;
   auto& layout_base = run.layout_base;
   const Layout& L = run.layouts[li];
-  json jl = {{"images", L.images}, {"driver", L.driver}};
-  json sets = json::array();
-  for (auto& s : L.uv_sets) sets.push_back({{"mesh", asset.primitives[size_t(s.primitive)].mesh},
-                                            {"primitive", asset.primitives[size_t(s.primitive)].primitive},
-                                            {"tex_coord", s.tex_coord}});
-  jl["uv_sets"] = sets;
+  LayoutReport lr;
+  lr.images = L.images, lr.driver = L.driver;
+  for (auto& s : L.uv_sets) {
+    const io::Primitive& prim = asset.primitives[size_t(s.primitive)];
+    lr.uv_sets.push_back({prim.mesh, prim.primitive, s.tex_coord});
+  }
   if (!L.untouched.empty()) {
-    jl["untouched"] = L.untouched;
+    lr.untouched = L.untouched;
     warnings.push_back("layout " + std::to_string(li) + " left untouched: " + L.untouched);
-    layout_base.push_back(jl);
+    layout_base.push_back(lr);
     return;
   }
-  layout_base.push_back(jl);
+  layout_base.push_back(lr);
   run.prepared.emplace_back();
   Prepared& P = run.prepared.back();
   P.index = li;
@@ -1349,11 +1340,11 @@ void guard_against_resize(Run& run) {
   for (const auto& t : chosen.textures) {
     // The same texels at the image's own aspect ratio: a user's resize keeps the shape
     // even where the packer chose another one.
-    const double w0 = t["old_size"][0].get<double>(), h0 = t["old_size"][1].get<double>();
-    const double texels = t["new_size"][0].get<double>() * t["new_size"][1].get<double>();
+    const double w0 = t.old_size[0], h0 = t.old_size[1];
+    const double texels = double(t.new_size[0]) * double(t.new_size[1]);
     const uint32_t w = std::max(1u, uint32_t(std::lround(std::sqrt(texels * w0 / h0))));
     const uint32_t h = std::max(1u, uint32_t(std::lround(texels / w)));
-    sizes.push_back({t["image"].get<int>(), {w, h}});
+    sizes.push_back({t.image, {w, h}});
   }
   io::GltfFile resized = original;
   resize_images(resized, sizes);
@@ -1365,7 +1356,7 @@ void guard_against_resize(Run& run) {
   if (!(chosen.q >= 0 && chosen.q < q_resize)) {
     chosen_by = "resize";
     file = std::move(resized);
-    for (auto& t : chosen.textures) t["new_bytes"] = file.image_bytes[size_t(t["image"].get<int>())].size();
+    for (auto& t : chosen.textures) t.new_bytes = file.image_bytes[size_t(t.image)].size();
     warnings.push_back("the plain resize to the same texels looks better (q " + std::to_string(q_resize) + " vs " +
                        std::to_string(chosen.q) + "): wrote the resize");
   }
@@ -1407,7 +1398,7 @@ void size_to_max_gmsd(Run& run) {
   if (!met) warnings.push_back("no size meets --max-gmsd " + std::to_string(o.max_gmsd) + "; kept the source density");
   chosen.new_texels = 0;
   for (auto& t : chosen.textures) {
-    const int i = t["image"].get<int>();
+    const int i = t.image;
     Image img = io::decode_image(file.image_bytes[size_t(i)], file.path);
     const uint32_t w = std::max(1u, uint32_t(std::lround(img.width * ratio)));
     const uint32_t h = std::max(1u, uint32_t(std::lround(img.height * ratio)));
@@ -1415,8 +1406,8 @@ void size_to_max_gmsd(Run& run) {
       file.image_bytes[size_t(i)] =
           io::encode_image(eval::resize_area(img, w, h), io::encode_settings_of(original.image_bytes[size_t(i)]));
     }
-    t["new_size"] = {w, h};
-    t["new_bytes"] = file.image_bytes[size_t(i)].size();
+    t.new_size = {w, h};
+    t.new_bytes = file.image_bytes[size_t(i)].size();
     chosen.new_texels += double(w) * h;
   }
   run.result.max_gmsd = MaxGmsd{o.max_gmsd, met, chosen_c, chosen_q, ratio};
@@ -1434,7 +1425,7 @@ void count_texture_costs(Run& run) {
   TextureCost &old_total = totals.old_cost, &new_total = totals.new_cost;
   uint64_t &old_bytes = totals.old_bytes, &new_bytes = totals.new_bytes, &resize_bytes = totals.resize_bytes;
   for (auto& t : run.chosen.textures) {
-    const size_t i = t["image"].get<size_t>();
+    const size_t i = size_t(t.image);
     const std::vector<uint8_t>& before = original.image_bytes[i];
     const std::vector<uint8_t>& after = file.image_bytes[i];
     const io::ImageHeader hb = io::read_image_header(before, file.path), ha = io::read_image_header(after, file.path);
@@ -1445,14 +1436,13 @@ void count_texture_costs(Run& run) {
                               : eval::resize_lanczos3(source, ha.width, ha.height, false);
     const size_t resize = io::encode_image(resized, settings).size();
     const TextureCost cb = texture_cost(hb.width, hb.height), ca = texture_cost(ha.width, ha.height);
-    t["new_size"] = {ha.width, ha.height};  // the resize's when the guard wrote it
-    t["new_bytes"] = after.size();
-    t["encoding"] = io::describe(settings);
-    t["old"] = cost_json(cb, before.size());
-    t["new"] = cost_json(ca, after.size());
-    t["resize_bytes"] = resize;
-    t["bytes_ratio"] = double(after.size()) / double(std::max<size_t>(1, before.size()));
-    t["bytes_vs_resize"] = double(after.size()) / double(std::max<size_t>(1, resize));
+    t.new_size = {ha.width, ha.height};  // the resize's when the guard wrote it
+    t.new_bytes = after.size();
+    t.encoding = io::describe(settings);
+    t.old_cost = cb, t.new_cost = ca;
+    t.resize_bytes = resize;
+    t.bytes_ratio = double(after.size()) / double(std::max<size_t>(1, before.size()));
+    t.bytes_vs_resize = double(after.size()) / double(std::max<size_t>(1, resize));
     old_total.texels += cb.texels, old_total.vram_rgba8 += cb.vram_rgba8, old_total.vram_bc7 += cb.vram_bc7;
     new_total.texels += ca.texels, new_total.vram_rgba8 += ca.vram_rgba8, new_total.vram_bc7 += ca.vram_bc7;
     old_bytes += before.size(), new_bytes += after.size(), resize_bytes += resize;

@@ -15,6 +15,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <array>
 #include <cstdint>
 #include <functional>
 #include <optional>
@@ -115,6 +116,123 @@ struct MaxGmsd {
   double scale = 1;  // of every re-baked texture
 };
 
+// One UV set of a layout (report: layouts[].uv_sets[]): TEXCOORD_<tex_coord> of glTF mesh
+// `mesh`'s primitive `primitive`.
+struct UvSetReport {
+  int mesh = -1, primitive = -1, tex_coord = 0;
+};
+
+// The equal-slope allocation of a layout's optimized triangles at the requested cost
+// (report: layouts[].equal_slope; perceptual/rate_allocation.h).
+struct EqualSlopeReport {
+  double cost = 0;        // share of the source's texels under the triangles
+  double spent = 0;       // sum a_t s_t^2 / sum a_t at the solution
+  double multiplier = 0;  // the Lagrange multiplier mu
+  std::array<double, 3> scale_quartiles{};  // of the triangles' isotropic scales
+};
+
+// The `unit-scale` candidate's scales per packing unit (report: layouts[].unit_scale).
+struct UnitScaleReport {
+  double cost = 0;   // the allocation's share of the units' source texels
+  size_t units = 0;  // packing units
+  std::array<double, 3> scale_quartiles{};  // of the units' scales, the largest 1
+  double scale_min = 0;
+};
+
+// The isometric layout's charts (report: layouts[].isometric; pipeline/isometric_charts.h).
+struct IsometricReport {
+  size_t charts_flattened = 0, charts_kept = 0;  // kept: the input shape
+  size_t holes_filled = 0;                       // boundary loops closed for the solves
+  double texels_per_area = 0;                    // the common density, texels per unit of 3-D area
+};
+
+// Reshaped charts re-embedded in their input outline (report: layouts[].outline).
+struct OutlineReport {
+  size_t kept = 0;         // charts re-embedded in their input outline
+  size_t failed = 0;       // ... where that folded or overlapped: the mesh stage's shape
+  double mean_blend = 0;   // over the kept ones (perceptual::OutlineFit::blend)
+};
+
+// What the triangle stage measured over a layout (report: layouts[].triangle_stage).
+struct TriangleStageReport {
+  // The GMSD bound: the fixed epsilon, or under rate control (rate_control set, written
+  // instead of it) the per-triangle bounds' quartiles and maximum.
+  double epsilon = 0;
+  struct RateControl {
+    std::array<double, 3> quartiles{};
+    double max = 0;
+  };
+  std::optional<RateControl> rate_control;
+  int evaluations = 0;     // per triangle
+  bool early_stop = false;
+  uint32_t view_size = 0;  // pixels a view side
+  size_t triangles = 0;    // through the triangle stage
+  size_t feasible = 0;     // some evaluation met epsilon
+  size_t infeasible = 0;   // none did: kept at the identity
+  size_t views_resolve_texels = 0;  // every view at most one source texel a pixel
+  size_t sampled_by_patches = 0;    // large triangles seen through a sample of patches
+  size_t tiles_coarsened = 0;       // views whose tile took a coarser lattice at J = I
+  std::array<double, 3> lambda_area_quartiles{};  // lambda1 lambda2 of the targets
+  // The infeasible triangles' loss at the identity, when there are any.
+  struct IdentityGmsd {
+    double median = 0, max = 0;
+  };
+  std::optional<IdentityGmsd> infeasible_identity_gmsd;
+};
+
+// One UV layout of the file (report: layouts[i], layout i of the file). An untouched layout
+// has only images, driver, uv_sets and untouched; a re-parameterized one has the rest
+// (the optional ones only where their candidate or options made them).
+struct LayoutReport {
+  std::vector<int> images;  // image indices that sample it
+  int driver = -1;          // the image whose perceptual loss drives the optimization
+  std::vector<UvSetReport> uv_sets;
+  std::optional<std::string> untouched;  // why the layout is left as it is
+  std::optional<EqualSlopeReport> equal_slope;  // equal-slope candidates
+  std::optional<UnitScaleReport> unit_scale;    // the unit-scale candidate
+  std::optional<IsometricReport> isometric;     // flatten --assign
+  double pack_seconds = 0;
+  size_t charts = 0, rigid_charts = 0;  // rigid: mixed orientation, moved, not reshaped
+  size_t shared_texel_charts = 0;       // packed with the charts they share texels with, unreshaped
+  size_t packing_units = 0;
+  size_t exact_units = 0;   // units whose texels are copied, not resampled
+  size_t exact_texels = 0;  // texels copied (over every image of the layout)
+  std::array<uint32_t, 2> atlas{};  // the driver's new size, texels
+  double scale = 0;         // the packing scale, new texels per source texel
+  double scale_cap = 0;     // the source density of the densest triangles
+  bool capped_at_source_density = false;  // scale reached scale_cap
+  double packing_efficiency = 0;  // share of the image's texels under charts
+  uint32_t gutter = 0;            // texels between charts
+  std::array<uint32_t, 2> edge_gutter{};  // texels at the left/right and top/bottom edges
+  double gutter_texels = 0;       // texels kept empty around charts and at the edges
+  double chart_cost_ratio = 0;    // eq. 21: texels under the charts / the input's
+  size_t flips = 0;
+  size_t overlaps_new = 0;             // triangle pairs; 0, or the layout is not written
+  size_t overlap_fallback_charts = 0;  // reshaped charts that ran over themselves: input shape
+  size_t overlap_fallback_pairs = 0;   // the new overlapping pairs they would have had
+  std::optional<OutlineReport> outline;  // outline candidates
+  // With the triangle stage (optimize): charts whose mesh-stage factorization failed (kept
+  // unreshaped), and what the stage measured.
+  std::optional<size_t> mesh_stage_failed_charts;
+  std::optional<TriangleStageReport> triangle_stage;
+};
+
+// One re-baked image (report: textures[]): its sizes, bytes and costs as written, and the
+// bytes of the input resized to the same size (texture_costs.h).
+struct TextureReport {
+  int image = -1;
+  std::string name;
+  std::string role;  // its first use's (io::to_string(TextureRole)), "other" when unused
+  std::array<uint32_t, 2> old_size{}, new_size{};  // texels (new: the resize's when the guard wrote it)
+  uint64_t old_bytes = 0, new_bytes = 0;           // encoded
+  // Set by reparam's texture costs, in every report.
+  std::string encoding;  // io::describe of the input's encode settings
+  TextureCost old_cost, new_cost;  // report: old, new (with old_bytes, new_bytes)
+  uint64_t resize_bytes = 0;       // the input Lanczos-3-resized to new_size, encoded the same way
+  double bytes_ratio = 0;          // new_bytes / old_bytes
+  double bytes_vs_resize = 0;      // new_bytes / resize_bytes
+};
+
 struct StageSeconds {
   std::optional<double> max_gmsd_eval;  // --max-gmsd's curve
   double texture_costs = 0, triangle_stage = 0, mesh_stage = 0, pack = 0, rebake = 0;
@@ -150,7 +268,8 @@ struct ReparamResult {
   std::optional<double> q;  // the written file's 20-view q, when scored
   // Per UV layout and per re-baked texture, the details the README lists (sizes, scales,
   // packing, triangle-stage counts, bytes); layouts[i] is layout i of the file.
-  nlohmann::ordered_json layouts, textures;
+  std::vector<LayoutReport> layouts;
+  std::vector<TextureReport> textures;
   double cost_ratio = 1;  // new image texels / old over the re-baked textures
   size_t flips = 0, overlaps_new = 0, overlap_fallback_charts = 0, charts = 0;
   size_t triangles_optimized = 0, triangles_infeasible = 0;

@@ -6,9 +6,104 @@ namespace uvpress::pipeline {
 
 using json = nlohmann::ordered_json;
 
+namespace {
+
+json triangle_stage_json(const TriangleStageReport& t) {
+  json eps = t.epsilon;
+  if (t.rate_control)
+    eps = {{"rule", "rate control: max(margin * loss under the resize to the requested cost, floor)"},
+           {"quartiles", t.rate_control->quartiles},
+           {"max", t.rate_control->max}};
+  json j = {{"epsilon", eps},
+            {"evaluations", t.evaluations},
+            {"early_stop", t.early_stop},
+            {"view_size", t.view_size},
+            {"triangles", t.triangles},
+            {"feasible", t.feasible},
+            {"infeasible", t.infeasible},
+            {"views_resolve_texels", t.views_resolve_texels},
+            {"sampled_by_patches", t.sampled_by_patches},
+            {"tiles_coarsened", t.tiles_coarsened},
+            {"lambda_area_quartiles", t.lambda_area_quartiles}};
+  if (t.infeasible_identity_gmsd)
+    j["infeasible_identity_gmsd"] = {{"median", t.infeasible_identity_gmsd->median},
+                                     {"max", t.infeasible_identity_gmsd->max}};
+  return j;
+}
+
+json layout_json(const LayoutReport& l) {
+  json j = {{"images", l.images}, {"driver", l.driver}};
+  json sets = json::array();
+  for (const auto& s : l.uv_sets)
+    sets.push_back({{"mesh", s.mesh}, {"primitive", s.primitive}, {"tex_coord", s.tex_coord}});
+  j["uv_sets"] = sets;
+  if (l.untouched) {
+    j["untouched"] = *l.untouched;
+    return j;
+  }
+  if (l.equal_slope)
+    j["equal_slope"] = {{"cost", l.equal_slope->cost},
+                        {"spent", l.equal_slope->spent},
+                        {"multiplier", l.equal_slope->multiplier},
+                        {"scale_quartiles", l.equal_slope->scale_quartiles}};
+  if (l.unit_scale)
+    j["unit_scale"] = {{"cost", l.unit_scale->cost},
+                       {"units", l.unit_scale->units},
+                       {"scale_quartiles", l.unit_scale->scale_quartiles},
+                       {"scale_min", l.unit_scale->scale_min}};
+  if (l.isometric)
+    j["isometric"] = {{"charts_flattened", l.isometric->charts_flattened},
+                      {"charts_kept", l.isometric->charts_kept},
+                      {"holes_filled", l.isometric->holes_filled},
+                      {"texels_per_area", l.isometric->texels_per_area}};
+  j["pack_seconds"] = l.pack_seconds;
+  j["charts"] = l.charts;
+  j["rigid_charts"] = l.rigid_charts;
+  j["shared_texel_charts"] = l.shared_texel_charts;
+  j["packing_units"] = l.packing_units;
+  j["exact_units"] = l.exact_units;
+  j["exact_texels"] = l.exact_texels;
+  j["atlas"] = l.atlas;
+  j["scale"] = l.scale;
+  j["scale_cap"] = l.scale_cap;
+  j["capped_at_source_density"] = l.capped_at_source_density;
+  j["packing_efficiency"] = l.packing_efficiency;
+  j["gutter"] = l.gutter;
+  j["edge_gutter"] = l.edge_gutter;
+  j["gutter_texels"] = l.gutter_texels;
+  j["chart_cost_ratio"] = l.chart_cost_ratio;
+  j["flips"] = l.flips;
+  j["overlaps_new"] = l.overlaps_new;
+  j["overlap_fallback_charts"] = l.overlap_fallback_charts;
+  j["overlap_fallback_pairs"] = l.overlap_fallback_pairs;
+  if (l.outline)
+    j["outline"] = {{"kept", l.outline->kept}, {"failed", l.outline->failed}, {"mean_blend", l.outline->mean_blend}};
+  if (l.mesh_stage_failed_charts) j["mesh_stage_failed_charts"] = *l.mesh_stage_failed_charts;
+  if (l.triangle_stage) j["triangle_stage"] = triangle_stage_json(*l.triangle_stage);
+  return j;
+}
+
+json texture_json(const TextureReport& t) {
+  return {{"image", t.image},
+          {"name", t.name},
+          {"role", t.role},
+          {"old_size", t.old_size},
+          {"new_size", t.new_size},
+          {"old_bytes", t.old_bytes},
+          {"new_bytes", t.new_bytes},
+          {"encoding", t.encoding},
+          {"old", cost_json(t.old_cost, t.old_bytes)},
+          {"new", cost_json(t.new_cost, t.new_bytes)},
+          {"resize_bytes", t.resize_bytes},
+          {"bytes_ratio", t.bytes_ratio},
+          {"bytes_vs_resize", t.bytes_vs_resize}};
+}
+
+}  // namespace
+
 bool ReparamResult::capped_at_source_density() const {
   bool capped = false;
-  for (const auto& l : layouts) capped |= l.value("capped_at_source_density", false);
+  for (const auto& l : layouts) capped |= l.capped_at_source_density;
   return capped;
 }
 
@@ -54,8 +149,10 @@ json ReparamResult::to_json() const {
   else
     report["guard"] = nullptr;
   report["q"] = q ? json(*q) : json(nullptr);
-  report["layouts"] = layouts;
-  report["textures"] = textures;
+  report["layouts"] = json::array();
+  for (const auto& l : layouts) report["layouts"].push_back(layout_json(l));
+  report["textures"] = json::array();
+  for (const auto& t : textures) report["textures"].push_back(texture_json(t));
   report["cost_ratio"] = cost_ratio;
   report["flips"] = flips;
   report["overlaps_new"] = overlaps_new;  // always 0 in a written file

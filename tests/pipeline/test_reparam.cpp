@@ -99,10 +99,11 @@ TEST_CASE("reparam on the demo asset: smaller texture, nothing flipped, valid, d
   o.cost = 0.5;
   o.triangle.evaluations = 16;
   o.triangle.view_size = 16;
-  auto report = pipeline::reparam(out, *engine, o).to_json();
+  const pipeline::ReparamResult result = pipeline::reparam(out, *engine, o);
+  auto report = result.to_json();
   CHECK(report["flips"] == 0);
   CHECK(report["cost_ratio"].get<double>() <= 0.5 + 0.02);
-  CHECK(report["textures"].size() == 1);
+  CHECK(result.textures.size() == 1);
   test::Scratch dir("reparam-demo");
   io::save_gltf(out, (dir / "demo.glb").string());
   CHECK(test::validate_gltf(dir / "demo.glb")["numErrors"] == 0);
@@ -123,7 +124,8 @@ TEST_CASE("reparam keeps shared assets valid and leaves tiled and transformed la
     io::GltfFile out = in;
     auto o = keep_shapes(0.5);
     o.score_resolution = 512;  // validity, not quality: fixed views (the auto ones cost 4-16x)
-    auto report = pipeline::reparam(out, *engine, o).to_json();
+    const pipeline::ReparamResult result = pipeline::reparam(out, *engine, o);
+    auto report = result.to_json();
     CHECK(report["flips"] == 0);
     auto target = dir / (path.stem().string() + ".glb");
     io::save_gltf(out, target.string());
@@ -148,7 +150,7 @@ TEST_CASE("reparam keeps shared assets valid and leaves tiled and transformed la
       CHECK(surface_difference(in, out, 3, 0, 0) < 0.1);
     }
     if (name.rfind("MultiUVTest", 0) == 0) {
-      CHECK(report["layouts"].size() == 2);  // TEXCOORD_0 (baseColor) and TEXCOORD_1 (emissive) separately
+      CHECK(result.layouts.size() == 2);  // TEXCOORD_0 (baseColor) and TEXCOORD_1 (emissive) separately
       CHECK(surface_difference(in, out, 0, 1, 1) < 0.1);
     }
   }
@@ -163,11 +165,13 @@ TEST_CASE("reparam --max-gmsd: the cheapest size that meets the bound, tighter b
     o.max_gmsd = bound;
     o.triangle.evaluations = 12;
     o.triangle.view_size = 16;
-    auto report = pipeline::reparam(out, *engine, o).to_json();
+    const pipeline::ReparamResult result = pipeline::reparam(out, *engine, o);
+    auto report = result.to_json();
     INFO(report["max_gmsd"].dump());
     CHECK(report["flips"] == 0);
     if (report["max_gmsd"]["met"].get<bool>()) CHECK(report["max_gmsd"]["q"].get<double>() <= bound);
-    return report["textures"][0]["new_size"][0].get<uint32_t>();
+    REQUIRE(result.textures.size() == 1);
+    return result.textures[0].new_size[0];
   };
   const uint32_t loose = run(0.06), tight = run(0.02);
   CHECK(loose < tight);
@@ -235,11 +239,12 @@ TEST_CASE("reparam --no-optimize at cost 1: charts that fit at scale 1 keep thei
   pipeline::ReparamOptions o = keep_shapes(1.0);
   o.guard = false;  // at cost 1 the "resize" is the input itself: a tie the guard would give to it
   io::GltfFile out = in;
-  auto report = pipeline::reparam(out, *engine, o).to_json();
-  INFO(report.dump());
-  const auto& layout = report["layouts"][0];
-  CHECK(layout["scale"].get<double>() == Approx(1.0).margin(1e-12));
-  CHECK(layout["exact_units"] == 1);
+  const pipeline::ReparamResult result = pipeline::reparam(out, *engine, o);
+  INFO(result.to_json().dump());
+  REQUIRE(result.layouts.size() == 1);
+  const pipeline::LayoutReport& layout = result.layouts[0];
+  CHECK(layout.scale == Approx(1.0).margin(1e-12));
+  CHECK(layout.exact_units == 1);
   const io::Asset a = io::build_asset(in), b = io::build_asset(out);
   CHECK(a.primitives[0].uv_sets[0].uv != b.primitives[0].uv_sets[0].uv);  // moved
   const double q = eval::score_as_written(in, out, *engine, eo).q;
@@ -263,19 +268,21 @@ TEST_CASE("reparam's gutter at the image edges follows the sampler: none where i
   o.guard = false;
   o.score_resolution = 512;
   io::GltfFile out = clamped;
-  auto r = pipeline::reparam(out, *engine, o).to_json();
-  INFO(r.dump());
-  const uint32_t g = r["layouts"][0]["gutter"].get<uint32_t>();
+  pipeline::ReparamResult r = pipeline::reparam(out, *engine, o);
+  INFO(r.to_json().dump());
+  REQUIRE(r.layouts.size() == 1);
+  const uint32_t g = r.layouts[0].gutter;
   CHECK(g >= 4);
-  CHECK(r["layouts"][0]["edge_gutter"].dump() == "[0,0]");
-  CHECK(r["layouts"][0]["packing_efficiency"].get<double>() > 0.99);
+  CHECK(r.layouts[0].edge_gutter == std::array<uint32_t, 2>{0, 0});
+  CHECK(r.layouts[0].packing_efficiency > 0.99);
   // At cost 1 it fits at scale 1, so its texels are copied: nothing is lost (with the
   // gutter at the edges it got scale 0.94).
   o.cost = 1.0;
   out = clamped;
-  r = pipeline::reparam(out, *engine, o).to_json();
-  CHECK(r["layouts"][0]["scale"].get<double>() == Approx(1.0).margin(1e-12));
-  CHECK(r["layouts"][0]["exact_units"] == 1);
+  r = pipeline::reparam(out, *engine, o);
+  REQUIRE(r.layouts.size() == 1);
+  CHECK(r.layouts[0].scale == Approx(1.0).margin(1e-12));
+  CHECK(r.layouts[0].exact_units == 1);
   eval::EvalOptions eo;
   eo.artifacts = false;
   eo.filter = eval::TextureFilter::Bilinear;
@@ -285,9 +292,10 @@ TEST_CASE("reparam's gutter at the image edges follows the sampler: none where i
   io::GltfFile wrapped = clamped;
   wrapped.model.samplers[0].wrapS = TINYGLTF_TEXTURE_WRAP_REPEAT;
   out = wrapped;
-  r = pipeline::reparam(out, *engine, o).to_json();
-  CHECK(r["layouts"][0]["edge_gutter"].dump() == "[" + std::to_string((g + 1) / 2) + ",0]");
-  CHECK(r["layouts"][0]["packing_efficiency"].get<double>() < 0.99);
+  r = pipeline::reparam(out, *engine, o);
+  REQUIRE(r.layouts.size() == 1);
+  CHECK(r.layouts[0].edge_gutter == std::array<uint32_t, 2>{(g + 1) / 2, 0});
+  CHECK(r.layouts[0].packing_efficiency < 0.99);
 }
 
 TEST_CASE("reparam prunes what it replaced: no new UNUSED_OBJECT or error, and a reparam of its output does not grow",
@@ -379,7 +387,8 @@ TEST_CASE("reparam on Duck at half the texels: gutters a mip level cleaner win, 
   io::GltfFile out = in;
   pipeline::ReparamOptions o;
   o.cost = 0.5;
-  const auto report = pipeline::reparam(out, *engine, o).to_json();
+  const pipeline::ReparamResult result = pipeline::reparam(out, *engine, o);
+  const auto report = result.to_json();
   INFO(report["candidates"].dump());
   REQUIRE(report["guard"].is_object());
   const double q_default = candidate_score(report, "repack").first;
@@ -389,7 +398,8 @@ TEST_CASE("reparam on Duck at half the texels: gutters a mip level cleaner win, 
   CHECK(q_wide < q_default);
   CHECK(report["chosen"] == "reparam");
   CHECK(report["layout"] == "repack+wide-gutter");
-  CHECK(report["layouts"][0]["gutter"] == 16);
+  REQUIRE(result.layouts.size() == 1);
+  CHECK(result.layouts[0].gutter == 16);
   eval::EvalOptions eo;
   eo.artifacts = false;
   const double q_written = eval::score_as_written(in, out, *engine, eo).q;
@@ -412,7 +422,8 @@ TEST_CASE("reparam on Duck: units that share texels trade density as wholes and 
   pipeline::ReparamOptions o;
   o.cost = 0.25;
   o.guard = false;
-  const auto report = pipeline::reparam(out, *engine, o).to_json();
+  const pipeline::ReparamResult result = pipeline::reparam(out, *engine, o);
+  const auto report = result.to_json();
   INFO(report["candidates"].dump());
   const double q_repack = candidate_score(report, "repack").first;
   const auto [q_units, cost_units] = candidate_score(report, "unit-scale");
@@ -430,11 +441,13 @@ TEST_CASE("reparam on Duck: units that share texels trade density as wholes and 
   CHECK(report["overlaps_new"] == 0);
   // The report describes the kept layout's units: unit-scale (or a variant of it) is kept.
   REQUIRE(report["layout"].get<std::string>().rfind("unit-scale", 0) == 0);
-  const auto& layout = report["layouts"][0];
-  CHECK(layout["shared_texel_charts"] == 8);
-  const auto& u = layout["unit_scale"];
-  CHECK(u["scale_min"].get<double>() < 0.5);  // smooth units gave texels up ...
-  CHECK(u["scale_quartiles"][2].get<double>() > 0.8);  // ... to the detailed ones, the largest at 1
-  CHECK(u["scale_quartiles"][2].get<double>() <= 1.0);
-  CHECK(u["cost"].get<double>() >= 0.25);
+  REQUIRE(result.layouts.size() == 1);
+  const pipeline::LayoutReport& layout = result.layouts[0];
+  CHECK(layout.shared_texel_charts == 8);
+  REQUIRE(layout.unit_scale);
+  const pipeline::UnitScaleReport& u = *layout.unit_scale;
+  CHECK(u.scale_min < 0.5);  // smooth units gave texels up ...
+  CHECK(u.scale_quartiles[2] > 0.8);  // ... to the detailed ones, the largest at 1
+  CHECK(u.scale_quartiles[2] <= 1.0);
+  CHECK(u.cost >= 0.25);
 }

@@ -61,22 +61,23 @@ void add_bench_pack(CLI::App& bench, Globals& g) {
           if (!run.optimize) ro.candidates = false, ro.least_squares_bake = false;
           io::GltfFile file = input;
           const pipeline::ReparamResult report = pipeline::reparam(file, *engine, ro);
-          for (const auto& [index, l] : report.layouts.items()) {
-            if (!l.contains("packing_efficiency")) continue;
-            const double image = l["atlas"][0].get<double>() * l["atlas"][1].get<double>();
+          for (size_t index = 0; index < report.layouts.size(); ++index) {
+            const pipeline::LayoutReport& l = report.layouts[index];
+            if (l.untouched) continue;  // not packed
+            const double image = double(l.atlas[0]) * double(l.atlas[1]);
             nlohmann::ordered_json line = {{"bench", "pack"},
                                            {"asset", name},
                                            {"layout", run.layout},
-                                           {"uv_layout", std::stoi(index)},
+                                           {"uv_layout", int(index)},
                                            {"cost", run.cost},
-                                           {"efficiency", l["packing_efficiency"]},
-                                           {"scale", l["scale"]},
-                                           {"atlas", l["atlas"]},
-                                           {"gutter", l["gutter"]},
-                                           {"gutter_share", l["gutter_texels"].get<double>() / image},
-                                           {"chart_cost_ratio", l["chart_cost_ratio"]},
-                                           {"units", l["packing_units"]},
-                                           {"seconds", l["pack_seconds"]}};
+                                           {"efficiency", l.packing_efficiency},
+                                           {"scale", l.scale},
+                                           {"atlas", l.atlas},
+                                           {"gutter", l.gutter},
+                                           {"gutter_share", l.gutter_texels / image},
+                                           {"chart_cost_ratio", l.chart_cost_ratio},
+                                           {"units", l.packing_units},
+                                           {"seconds", l.pack_seconds}};
             if (run.optimize) line["candidate"] = report.layout;
             std::printf("%s\n", line.dump().c_str());
             std::fflush(stdout);

@@ -111,7 +111,7 @@ void add_reparam(CLI::App& app, Globals& g) {
         // Nothing was re-parameterized: say why instead of a cost ratio of 1 that reads as a result.
         std::string why;
         for (const auto& l : r.layouts)
-          if (l.is_object() && l.contains("untouched")) why += (why.empty() ? "" : "; ") + l["untouched"].get<std::string>();
+          if (l.untouched) why += (why.empty() ? "" : "; ") + *l.untouched;
         verdict = "; nothing re-parameterized" + (why.empty() ? std::string(" (no textured layout)") : ": " + why);
       } else if (!r.guard.skipped.empty()) {
         verdict = "; not compared with a plain resize (eval cannot score this asset)";
