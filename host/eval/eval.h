@@ -40,8 +40,9 @@ constexpr uint32_t kMaxResolution = 4096;  // views of more than 1024 px are til
 struct EvalOptions {
   std::vector<double> cost_grid = {0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0};
   uint32_t resolution = 0;  // view images, pixels a side (8..kMaxResolution); 0: auto (eval.cpp, "Resolution")
-  uint32_t resolution_cap = 2048;       // auto: the largest side (512..kMaxResolution); where it binds, views
-                                        // are cropped to the asset at cap^2 pixels a view on average (eval.cpp)
+  uint32_t resolution_cap = 2560;       // auto: the largest side (512..kMaxResolution); where it binds, views
+                                        // are rolled and cropped to the asset at cap^2 pixels a view on average
+                                        // (eval.cpp)
   double resolution_percentile = 0.95;  // auto: share of the visible screen area to resolve
   TextureFilter filter = TextureFilter::Trilinear;
   bool noise_floor = true;  // measure and report the quarter-pixel noise floor (one more render)
@@ -142,6 +143,19 @@ std::array<float, 16> tile_camera(const std::array<float, 16>& camera, uint32_t 
 // (a, b, 1, 1) of a k x k view.
 std::array<float, 16> window_camera(const std::array<float, 16>& camera, double side, double x0, double y0, double w,
                                     double h);
+
+// A view's camera rolled about its axis by `angle` radians: what the view shows is the same,
+// its image turned counter-clockwise by `angle` about the view's centre (NDC x, y rotated;
+// the views are square and isotropic, so nothing is stretched).
+std::array<float, 16> roll_camera(const std::array<float, 16>& camera, double angle);
+
+// The roll (radians, in (-pi/4, pi/4]) under which the asset's screen rectangle, the
+// bounding box of its projected vertices in `camera`'s view, is smallest: the minimum-area
+// rectangle of their convex hull, one of whose sides lies on a hull edge (Freeman and
+// Shapira 1975). How cropped views hold an oblique elongated asset (the truck seen from a
+// dodecahedron vertex) in fewer pixels. 0 for fewer than 3 distinct points or a vertex
+// behind the eye.
+double asset_roll(const float* positions, size_t vertex_count, const std::array<float, 16>& camera);
 
 // Savings of curve A against curve B: points (cost, q) by increasing cost. Returns the
 // geometric mean ratio c_A / c_B at equal q and the number of q levels used (0: the
