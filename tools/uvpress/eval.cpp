@@ -41,7 +41,8 @@ void add_view_options(CLI::App* cmd, uint32_t& resolution, eval::TextureFilter& 
          },
          (prefix == "--score-" ? std::string("reparam's candidates and guard: ") : std::string()) +
              "View images, pixels a side, or auto: the smallest side >= 512 at which 95% of the visible surface "
-             "shows at most one texel per pixel, capped at 2048 (default auto)")
+             "shows at most one texel per pixel, capped at " + std::to_string(eval::EvalOptions{}.resolution_cap) +
+             " (views rolled and cropped to the asset where the cap binds; default auto)")
       ->type_name("auto|N");
   cmd->add_option_function<std::string>(
          prefix + "filter",
