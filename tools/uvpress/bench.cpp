@@ -6,7 +6,7 @@
 
 namespace uvpress::cli {
 
-std::vector<Backend> available_backends(const Globals& g) {
+std::vector<Backend> available_backends(const Globals& g, const char* bench) {
   std::vector<Backend> out;
   if (g.device != "auto") {
     auto e = g.make_engine();
@@ -20,7 +20,10 @@ std::vector<Backend> available_backends(const Globals& g) {
     try {
       out.push_back({"vulkan", engine::make_vulkan_engine(request, options)});
     } catch (const engine::EngineError& e) {
-      std::fprintf(stderr, "bench: no Vulkan %s device: %s\n", engine::to_string(request), e.what());
+      const nlohmann::ordered_json line = {
+          {"bench", bench}, {"backend", "vulkan"}, {"device", engine::to_string(request)}, {"skipped", e.what()}};
+      std::printf("%s\n", line.dump().c_str());
+      std::fflush(stdout);
     }
   }
   return out;

@@ -16,8 +16,10 @@ struct Backend {
 };
 
 // Every backend this machine has (the native CPU one, then each Vulkan kind present), or
-// only the one --device names when it names one.
-std::vector<Backend> available_backends(const Globals& g);
+// only the one --device names when it names one. Each Vulkan kind that is absent gets its
+// own line on stdout, {"bench": bench, "backend": "vulkan", "device": "gpu" | "lavapipe",
+// "skipped": why}, so a run says what it did not measure without an error on stderr.
+std::vector<Backend> available_backends(const Globals& g, const char* bench);
 
 // The assets the quality benchmarks measure: (name, path; "" = the embedded demo asset):
 // the demo and the shared Duck, Fox, CesiumMilkTruck and MultiUVTest under `shared`

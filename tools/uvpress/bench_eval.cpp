@@ -26,7 +26,7 @@ void add_bench_eval(CLI::App& bench, Globals& g) {
       eval::EvalOptions o;
       o.resolution = view->resolution, o.filter = view->filter, o.shading = view->shading;
       o.artifacts = false;
-      for (auto& b : available_backends(g)) {
+      for (auto& b : available_backends(g, "eval")) {
         const auto t0 = std::chrono::steady_clock::now();
         const eval::EvalResult r = eval::evaluate(file, {}, *b.engine, o);
         const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

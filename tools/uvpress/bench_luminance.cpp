@@ -10,7 +10,7 @@ namespace uvpress::cli {
 namespace {
 
 void bench_luminance(const Globals& g, const std::vector<uint32_t>& batches, uint32_t size, int repeats) {
-  auto backends = available_backends(g);
+  auto backends = available_backends(g, "luminance");
   for (uint32_t batch : batches) {
     std::vector<uint32_t> pixels(size_t(batch) * size * size);
     uint32_t h = 12345;

@@ -71,7 +71,7 @@ void bench_rebake(const Globals& g, uint32_t size, uint32_t out_size, int repeat
   atlas::RebakeOptions o;
   o.width = o.height = out_size;
   o.role = atlas::RebakeRole::Color;
-  for (auto& b : available_backends(g)) {
+  for (auto& b : available_backends(g, "rebake")) {
     atlas::RebakeStats stats;
     atlas::rebake(src, {mesh}, o, *b.engine, &stats);  // warm-up: pipelines, buffers, page faults
     double best = 1e300, best_sampling = 1e300;

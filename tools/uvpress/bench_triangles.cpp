@@ -89,7 +89,7 @@ void bench_triangles(const Globals& g, const std::vector<std::string>& specs, ui
                      bool early_stop) {
   std::vector<AssetWork> work;
   for (const auto& a : specs) work.push_back(load_asset(a));
-  auto backends = available_backends(g);
+  auto backends = available_backends(g, "triangles");
   for (const auto& a : work) {
     size_t total = 0;
     for (const auto& w : a.parts) total += w.primitive.triangle_count();

@@ -43,7 +43,7 @@ void bench_views(const Globals& g, const std::vector<uint32_t>& batches, uint32_
               k % uint32_t(desc.views.size()), 0, 0, 0};
   }
 
-  auto backends = available_backends(g);
+  auto backends = available_backends(g, "views");
   std::vector<double> cpu_rate(batches.size(), 0.0);  // the CPU backend runs first
   for (auto& b : backends) {
     auto t0 = std::chrono::steady_clock::now();
