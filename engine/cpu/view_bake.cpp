@@ -92,9 +92,11 @@ TileMap map_to_tile(const ViewDesc& view, const ViewTriangle* tris, uint32_t siz
 
 // Built twice and chosen at load time (GCC's function multi-versioning): with AVX2 the
 // stencil product and the vector updates run 8 lanes wide (Fox's triangle stage: 9 % less
-// device time). The results are the same bits on either: AVX2 brings no fused multiply-add
-// (that is the `fma` target, never to be added here: contracting a * b + c would round
-// differently), and each lane does what the scalar code does, in the same order.
+// device time). The results are the same bits on either: the engine is compiled with
+// -ffp-contract=off (engine/CMakeLists.txt), so no a * b + c is fused on any target; floating
+// point reductions are not reordered without -ffast-math/-fassociative-math (never to be
+// added here), so each lane does what the scalar code does, in the same order (the dot
+// products' 8 partial sums are lanes, added in a fixed order).
 __attribute__((target_clones("avx2", "default")))
 std::vector<float> bake_tile(const TileMap& m, const float* reference, uint32_t* iterations, float* mean_out) {
   const uint32_t w = m.width, n = m.width * m.height;

@@ -345,7 +345,7 @@ Texture view_texture(const Image& image, TextureFilter filter, bool rgb = false,
 }
 
 // Views are rendered in tiles of at most the engine's side, in chunks of whole views of
-// about this many pixels, so that a 2048-pixel evaluation never holds more than a few
+// about this many pixels, so that an evaluation at the cap never holds more than a few
 // views at once beside the reference's.
 constexpr size_t kChunkPixels = size_t(20) * 1024 * 1024;
 
@@ -770,9 +770,10 @@ std::vector<ViewFrame> cropped_frames(const std::vector<std::array<float, 16>>& 
 }
 
 // The views' resolution and frames (eval.cpp, "Resolution"). Where the cap binds, the views
-// are cropped to the asset's screen rectangle instead, at the largest side (a multiple of
-// 16, at most the wanted one and 2 kMaxResolution) whose windows hold no more pixels than
-// the capped whole views would: the same memory and time, more of the texture resolved.
+// are rolled to the asset (asset_roll) and cropped to its screen rectangle instead, at the
+// largest side (a multiple of 16, at most the wanted one and 2 kMaxResolution) whose windows
+// hold no more pixels than the capped whole views would: the same memory and time, more of
+// the texture resolved.
 ViewResolution choose_resolution(engine::Engine& engine, const LayoutMesh& ref,
                                  const std::vector<std::array<float, 16>>& cameras, const EvalOptions& o,
                                  Timing& timing, std::vector<ViewFrame>& frames) {

@@ -28,7 +28,7 @@ const char* to_string(TextureFilter filter);
 struct ViewResolution {
   uint32_t resolution = 512;  // pixels a side of the whole view
   bool automatic = false, capped = false;
-  bool cropped = false;        // views cropped to the asset's screen rectangle (where the cap binds)
+  bool cropped = false;        // views rolled and cropped to the asset's screen rectangle (where the cap binds)
   double view_pixels = 0;      // pixels rendered a view, on average
   double percentile = 0.95;
   double texels_per_pixel = 0;         // at the percentile, at `resolution`
