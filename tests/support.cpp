@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <array>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <random>
 #include <sstream>
@@ -110,7 +111,14 @@ std::unique_ptr<engine::Engine> lavapipe(uint64_t max_buffer_bytes) {
   engine::EngineOptions o;
   o.validation = true;
   o.max_buffer_bytes = max_buffer_bytes;
-  return engine::make_vulkan_engine(engine::DeviceRequest::Lavapipe, o);
+  // UVPRESS_TEST_VULKAN=gpu runs the same [vulkan] cases on a real GPU (a lent device machine);
+  // CI never sets it.
+  return engine::make_vulkan_engine(vulkan_tests_on_gpu() ? engine::DeviceRequest::Gpu : engine::DeviceRequest::Lavapipe, o);
+}
+
+bool vulkan_tests_on_gpu() {
+  const char* kind = std::getenv("UVPRESS_TEST_VULKAN");
+  return kind && std::string(kind) == "gpu";
 }
 
 }  // namespace uvpress::test

@@ -61,8 +61,10 @@ nlohmann::json validate_gltf(const fs::path& file);
 engine::Engine& cpu_engine();
 
 // Vulkan on lavapipe with the validation layer on; max_buffer_bytes 0 keeps the engine's
-// default. Throws engine::EngineError when this machine has no lavapipe.
+// default. Throws engine::EngineError when this machine has no lavapipe. UVPRESS_TEST_VULKAN=gpu
+// takes the real GPU instead, so that the [vulkan] cases check a vendor's driver.
 std::unique_ptr<engine::Engine> lavapipe(uint64_t max_buffer_bytes = 0);
+bool vulkan_tests_on_gpu();
 
 }  // namespace uvpress::test
 

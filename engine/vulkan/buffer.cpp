@@ -1,12 +1,14 @@
-// Host-visible storage buffers. On lavapipe and unified-memory GPUs every type is
-// device-local and host-visible, so there is no staging copy to make.
+// Host-visible storage buffers, in the memory their HostAccess asks for (compute.h). On
+// lavapipe and unified-memory GPUs every type is device-local, host-visible and cached, so
+// there is no staging copy to make; on a discrete GPU the device reads inputs from its own
+// memory and writes results into the host's.
 #include "compute.h"
 
 #include <string>
 
 namespace uvpress::engine::vk {
 
-Buffer::Buffer(Context& context, uint64_t bytes) : context_(context), bytes_(bytes) {
+Buffer::Buffer(Context& context, uint64_t bytes, HostAccess access) : context_(context), bytes_(bytes) {
   if (bytes == 0 || bytes > context.max_buffer_bytes())
     throw EngineError("Vulkan: buffer of " + std::to_string(bytes) + " bytes is outside the device's limit of " +
                       std::to_string(context.max_buffer_bytes()));
@@ -21,7 +23,8 @@ Buffer::Buffer(Context& context, uint64_t bytes) : context_(context), bytes_(byt
   mai.allocationSize = req.size;
   try {
     mai.memoryTypeIndex = context.memory_type(
-        req.memoryTypeBits, VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT);
+        req.memoryTypeBits, VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT,
+        access == HostAccess::Read ? VK_MEMORY_PROPERTY_HOST_CACHED_BIT : VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
     check(vkAllocateMemory(context.device(), &mai, nullptr, &memory_), "vkAllocateMemory");
     check(vkBindBufferMemory(context.device(), buffer_, memory_, 0), "vkBindBufferMemory");
     check(vkMapMemory(context.device(), memory_, 0, VK_WHOLE_SIZE, 0, &mapped_), "vkMapMemory");
@@ -38,10 +41,10 @@ Buffer::~Buffer() {
   vkDestroyBuffer(context_.device(), buffer_, nullptr);
 }
 
-Buffer& reuse(Context& context, std::unique_ptr<Buffer>& slot, uint64_t bytes) {
+Buffer& reuse(Context& context, std::unique_ptr<Buffer>& slot, uint64_t bytes, HostAccess access) {
   if (!slot || slot->bytes() < bytes) {
     slot.reset();  // free the old one first: two big buffers may not fit together
-    slot = std::make_unique<Buffer>(context, bytes);
+    slot = std::make_unique<Buffer>(context, bytes, access);
   }
   return *slot;
 }

@@ -180,17 +180,18 @@ void Context::release() {
   instance_ = VK_NULL_HANDLE;
 }
 
-uint32_t Context::memory_type(uint32_t type_bits, VkMemoryPropertyFlags required) const {
-  int fallback = -1;
+uint32_t Context::memory_type(uint32_t type_bits, VkMemoryPropertyFlags required,
+                              VkMemoryPropertyFlags preferred) const {
+  int best = -1, best_rank = 3;
   for (uint32_t i = 0; i < memory_.memoryTypeCount; ++i) {
     if (!(type_bits & (1u << i))) continue;
     VkMemoryPropertyFlags f = memory_.memoryTypes[i].propertyFlags;
     if ((f & required) != required) continue;
-    if (f & VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT) return i;
-    if (fallback < 0) fallback = int(i);
+    const int rank = (f & preferred) == preferred ? 0 : (f & VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT) ? 1 : 2;
+    if (rank < best_rank) best = int(i), best_rank = rank;
   }
-  if (fallback < 0) throw EngineError("Vulkan: no host-visible memory type for a storage buffer");
-  return uint32_t(fallback);
+  if (best < 0) throw EngineError("Vulkan: no host-visible memory type for a storage buffer");
+  return uint32_t(best);
 }
 
 VKAPI_ATTR VkBool32 VKAPI_CALL Context::on_message(VkDebugUtilsMessageSeverityFlagBitsEXT severity,

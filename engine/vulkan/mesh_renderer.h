@@ -20,7 +20,9 @@ class MeshRenderer {
   MeshRenders render(const MeshRenderDesc& d);
 
  private:
-  vk::Buffer& buffer(std::unique_ptr<vk::Buffer>& slot, uint64_t bytes) { return vk::reuse(context_, slot, bytes); }
+  vk::Buffer& buffer(std::unique_ptr<vk::Buffer>& slot, uint64_t bytes, vk::HostAccess access = vk::HostAccess::Write) {
+    return vk::reuse(context_, slot, bytes, access);
+  }
 
   vk::Context& context_;
   vk::Sequence& sequence_;

@@ -60,7 +60,7 @@ void Rebaker::run(const RebakeTexelsDesc& d, float* texels) {
     const uint64_t n_texels = uint64_t(y1 - y0) * W;
     vk::Buffer& entries = buffer(entries_, std::max<uint64_t>(16, sizeof(shader::RebakeEntry) * n_entries));
     vk::Buffer& owner = buffer(owner_, 4 * n_texels);
-    vk::Buffer& out = buffer(texels_, 4ull * C * n_texels);
+    vk::Buffer& out = buffer(texels_, 4ull * C * n_texels, vk::HostAccess::Read);
     shader::RebakeEntry* e = entries.data<shader::RebakeEntry>();
     for (uint64_t tile = uint64_t(row0) * tx; tile < uint64_t(row0 + rows) * tx; ++tile) {
       const double ox = double((tile % tx) * T), oy = double((tile / tx) * T);

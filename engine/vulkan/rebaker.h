@@ -39,7 +39,9 @@ class Rebaker {
   // Triangle t in the frame of the tile whose corner is (ox, oy), computed in double.
   static shader::RebakeEntry make_entry(const RebakeTriangle& t, double ox, double oy);
 
-  vk::Buffer& buffer(std::unique_ptr<vk::Buffer>& slot, uint64_t bytes) { return vk::reuse(context_, slot, bytes); }
+  vk::Buffer& buffer(std::unique_ptr<vk::Buffer>& slot, uint64_t bytes, vk::HostAccess access = vk::HostAccess::Write) {
+    return vk::reuse(context_, slot, bytes, access);
+  }
 
   vk::Context& context_;
   vk::Sequence& sequence_;

@@ -103,8 +103,8 @@ class VulkanEngine final : public Engine {
     const uint64_t per_chunk = std::min<uint64_t>(b.count, max_buffer_ / (4 * n));
     if (per_chunk == 0) throw EngineError("Vulkan: one image is larger than the device's largest buffer");
     vk::Buffer& rgba = buffer(rgba_, 4 * n * per_chunk);
-    vk::Buffer& full = buffer(full_, 4 * n * per_chunk);
-    vk::Buffer& half = buffer(half_, 4 * n2 * per_chunk);
+    vk::Buffer& full = buffer(full_, 4 * n * per_chunk, vk::HostAccess::Read);
+    vk::Buffer& half = buffer(half_, 4 * n2 * per_chunk, vk::HostAccess::Read);
     const uint32_t max_z = context_.limits().maxComputeWorkGroupCount[2];
 
     for (uint64_t first = 0; first < b.count; first += per_chunk) {
@@ -148,7 +148,7 @@ class VulkanEngine final : public Engine {
     const uint64_t per_chunk = std::min<uint64_t>(pairs.count, max_buffer_ / (4 * n));
     vk::Buffer& a = buffer(pair_a_, 4 * n * per_chunk);
     vk::Buffer& b = buffer(pair_b_, 4 * n * per_chunk);
-    vk::Buffer& o = buffer(pair_out_, 4 * per_chunk);
+    vk::Buffer& o = buffer(pair_out_, 4 * per_chunk, vk::HostAccess::Read);
     const uint32_t max_x = context_.limits().maxComputeWorkGroupCount[0];
     for (uint64_t first = 0; first < pairs.count; first += per_chunk) {
       const uint32_t count = uint32_t(std::min<uint64_t>(per_chunk, pairs.count - first));
@@ -219,7 +219,7 @@ class VulkanEngine final : public Engine {
         std::min<uint64_t>({kScoreChunk, count, std::min(max_buffer_, kScoreScratchBytes) / kScoreSlotBytes}));
     vk::Buffer& cand = buffer(candidates_, sizeof(ViewCandidate) * chunk);
     vk::Buffer& scratch = buffer(scratch_, kScoreSlotBytes * chunk);
-    vk::Buffer& results = buffer(results_, 8ull * chunk);  // gmsd, lattice
+    vk::Buffer& results = buffer(results_, 8ull * chunk, vk::HostAccess::Read);  // gmsd, lattice
     for (const auto& page : set->pages) {
       // This page's candidates, in input order.
       std::vector<uint32_t> mine;
@@ -272,7 +272,9 @@ class VulkanEngine final : public Engine {
   }
 
   // Keeps a buffer across calls and grows it only when a call needs more.
-  vk::Buffer& buffer(std::unique_ptr<vk::Buffer>& slot, uint64_t bytes) { return vk::reuse(context_, slot, bytes); }
+  vk::Buffer& buffer(std::unique_ptr<vk::Buffer>& slot, uint64_t bytes, vk::HostAccess access = vk::HostAccess::Write) {
+    return vk::reuse(context_, slot, bytes, access);
+  }
 
   vk::Context context_;
   uint64_t max_buffer_;

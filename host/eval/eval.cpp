@@ -187,6 +187,15 @@ std::array<float, 16> window_camera(const std::array<float, 16>& m, double side,
   return t;
 }
 
+// Clip coordinates of point p (x y z) under the row-major view-projection m, in double.
+static std::array<double, 4> clip_of(const std::array<float, 16>& m, const float* p) {
+  std::array<double, 4> c;
+  for (int row = 0; row < 4; ++row)
+    c[size_t(row)] = double(m[size_t(4 * row)]) * p[0] + double(m[size_t(4 * row + 1)]) * p[1] +
+                     double(m[size_t(4 * row + 2)]) * p[2] + double(m[size_t(4 * row + 3)]);
+  return c;
+}
+
 std::array<float, 16> roll_camera(const std::array<float, 16>& m, double angle) {
   // Rows 0 and 1 (clip x, y) rotated; clip w, so the perspective divide, is unchanged.
   std::array<float, 16> t = m;
@@ -204,10 +213,7 @@ double asset_roll(const float* p, size_t n, const std::array<float, 16>& m) {
   std::vector<P> pts;
   pts.reserve(n);
   for (size_t v = 0; v < n; ++v) {
-    double c[4];
-    for (int row = 0; row < 4; ++row)
-      c[row] = double(m[size_t(4 * row)]) * p[3 * v] + double(m[size_t(4 * row + 1)]) * p[3 * v + 1] +
-               double(m[size_t(4 * row + 2)]) * p[3 * v + 2] + double(m[size_t(4 * row + 3)]);
+    const auto c = clip_of(m, p + 3 * v);
     if (!(c[3] > 0)) return 0;
     pts.push_back({c[0] / c[3], c[1] / c[3]});
   }
@@ -699,10 +705,7 @@ std::vector<float> texels_per_pixel(engine::Engine& engine, const LayoutMesh& re
       double X[3], Y[3];
       for (int k = 0; k < 3; ++k) {
         const float* p = ref.positions.data() + 3 * size_t(ref.indices[3 * t + size_t(k)]);
-        double c[4];
-        for (int row = 0; row < 4; ++row)
-          c[row] = double(m[size_t(4 * row)]) * p[0] + double(m[size_t(4 * row + 1)]) * p[1] +
-                   double(m[size_t(4 * row + 2)]) * p[2] + double(m[size_t(4 * row + 3)]);
+        const auto c = clip_of(m, p);
         X[k] = (c[0] / c[3] * 0.5 + 0.5) * res, Y[k] = (0.5 - 0.5 * c[1] / c[3]) * res;
       }
       screen[t] = 0.5 * std::abs((X[1] - X[0]) * (Y[2] - Y[0]) - (X[2] - X[0]) * (Y[1] - Y[0]));
@@ -727,10 +730,7 @@ std::vector<std::array<double, 4>> screen_rectangles(const LayoutMesh& ref,
     std::array<double, 4> r = {1, -1, 1, -1};
     for (size_t v = 0; v < ref.positions.size() / 3; ++v) {
       const float* p = ref.positions.data() + 3 * v;
-      double c[4];
-      for (int row = 0; row < 4; ++row)
-        c[row] = double(m[size_t(4 * row)]) * p[0] + double(m[size_t(4 * row + 1)]) * p[1] +
-                 double(m[size_t(4 * row + 2)]) * p[2] + double(m[size_t(4 * row + 3)]);
+      const auto c = clip_of(m, p);
       if (!(c[3] > 0)) return {};  // a vertex behind the eye: no rectangle to crop to
       r[0] = std::min(r[0], c[0] / c[3]), r[1] = std::max(r[1], c[0] / c[3]);
       r[2] = std::min(r[2], c[1] / c[3]), r[3] = std::max(r[3], c[1] / c[3]);
