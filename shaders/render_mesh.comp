@@ -15,7 +15,7 @@ layout(std430, binding = 1) readonly buffer BinOffsets { uint bin_offsets[]; }; 
 layout(std430, binding = 2) readonly buffer BinItems { uint bin_items[]; };      // indices into triangles
 layout(std430, binding = 3) readonly buffer Texture { float texels[]; };
 layout(std430, binding = 4) writeonly buffer Coverage { uint coverage[]; };
-layout(std430, binding = 5) buffer Pixels { float pixels[]; };
+layout(std430, binding = 5) writeonly buffer Pixels { float pixels[]; };
 layout(push_constant) uniform Push { MeshPush p; };
 
 int edge_function(int ax, int ay, int bx, int by, int px, int py) { return (bx - ax) * (py - ay) - (by - ay) * (px - ax); }
@@ -43,9 +43,10 @@ uint level_offset(uint level) {
   return n;
 }
 
-// Adds weight x the bilinear sample of mip level `level` at level-0 texel coordinates
-// (s, t) to pixels[at ..] (first: = instead of +=).
-void sample_level(uint level, float s, float t, float weight, uint at, bool first) {
+// The bilinear sample of mip level `level` at level-0 texel coordinates (s, t), `channels`
+// of it. The caller blends levels in registers and writes each pixel once: on a discrete GPU
+// the pixels live in host memory (HostAccess::Read), where a read-modify-write crosses the bus.
+vec4 sample_level(uint level, float s, float t) {
   uint C = p.channels;
   int TW = int(max(1u, p.texture_width >> level)), TH = int(max(1u, p.texture_height >> level));
   uint base = level_offset(level) * C;
@@ -79,6 +80,7 @@ void sample_level(uint level, float s, float t, float weight, uint at, bool firs
   }
   uint a00 = base + (uint(j0) * uint(TW) + uint(i0)) * C, a10 = base + (uint(j0) * uint(TW) + uint(i1)) * C;
   uint a01 = base + (uint(j1) * uint(TW) + uint(i0)) * C, a11 = base + (uint(j1) * uint(TW) + uint(i1)) * C;
+  vec4 out_value = vec4(0.0);
   for (uint c = 0u; c < C; ++c) {
     precise float top = (1.0 - fs) * texels[a00 + c];
     top += fs * texels[a10 + c];
@@ -86,11 +88,9 @@ void sample_level(uint level, float s, float t, float weight, uint at, bool firs
     bottom += fs * texels[a11 + c];
     precise float v = (1.0 - ft) * top;
     v += ft * bottom;
-    if (first)
-      pixels[at + c] = weight == 1.0 ? v : weight * v;
-    else
-      pixels[at + c] += weight * v;
+    out_value[c] = v;
   }
+  return out_value;
 }
 
 void main() {
@@ -143,11 +143,18 @@ void main() {
   }
   uint C = p.channels;
   if (!(lod > 0.0)) {
-    sample_level(0u, s, t, 1.0, pix * C, true);
+    vec4 v = sample_level(0u, s, t);
+    for (uint c = 0u; c < C; ++c) pixels[pix * C + c] = v[c];
     return;
   }
   uint l0 = uint(floor(lod)), l1 = min(l0 + 1u, p.mip_levels - 1u);
   float f = lod - float(l0);
-  sample_level(l0, s, t, 1.0 - f, pix * C, true);
-  sample_level(l1, s, t, f, pix * C, false);
+  vec4 v0 = sample_level(l0, s, t), v1 = sample_level(l1, s, t);
+  for (uint c = 0u; c < C; ++c) {
+    // The CPU oracle's order: (1 - f) v0, then + f v1, each rounded (no fused multiply-add).
+    precise float w = 1.0 - f;
+    precise float r = w == 1.0 ? v0[c] : w * v0[c];
+    r += f * v1[c];
+    pixels[pix * C + c] = r;
+  }
 }
