@@ -12,8 +12,9 @@ void check_view_set(const ViewSetDesc& desc);
 
 // Throws EngineError for a MeshRenderDesc that breaks its limits.
 void check_mesh_render(const MeshRenderDesc& desc);
-// Checks `desc` and returns its result sized for every camera (coverage and pixels zeroed).
-MeshRenders sized_mesh_renders(const MeshRenderDesc& desc);
+// Checks `desc` and sizes `out` for every camera (its storage kept when large enough; the
+// renderers write every pixel).
+void size_mesh_renders(const MeshRenderDesc& desc, MeshRenders& out);
 
 // Throws EngineError for a RebakeTexelsDesc that breaks its rules.
 void check_rebake_texels(const RebakeTexelsDesc& desc);

@@ -3,6 +3,7 @@
 #include "mesh_render.h"
 
 #include "backend.h"
+#include "parallel_for.h"
 
 #include <algorithm>
 #include <cmath>
@@ -156,39 +157,27 @@ void shade_tile(const MeshRenderDesc& d, const ViewSetup& setup, uint32_t tx, ui
 
 }  // namespace mesh
 
-MeshRenders sized_mesh_renders(const MeshRenderDesc& d) {
+void size_mesh_renders(const MeshRenderDesc& d, MeshRenders& out) {
   check_mesh_render(d);
-  MeshRenders out;
   out.width = d.width, out.height = d.height, out.count = uint32_t(d.cameras.size()), out.channels = d.channels;
   const size_t n = size_t(d.width) * d.height;
   out.coverage.resize(n * out.count);
   out.pixels.resize(n * out.count * d.channels);
-  return out;
 }
 
-MeshRenders Engine::render_mesh(const MeshRenderDesc& d) {
-  MeshRenders out = sized_mesh_renders(d);
+void Engine::render_mesh(const MeshRenderDesc& d, MeshRenders& out) {
+  size_mesh_renders(d, out);
   const size_t n = size_t(d.width) * d.height;
   const uint32_t tx = mesh::tiles_x(d), ty = mesh::tiles_y(d);
   std::vector<mesh::ViewSetup> setups(out.count);
   const unsigned threads = std::max(1u, device().backend == "cpu" ? device().threads : std::thread::hardware_concurrency());
   // Work items: view set-ups, then tile rows of every view; results depend only on the item.
-  auto run = [&](uint32_t items, auto fn) {
-    const unsigned t = std::max(1u, std::min<unsigned>(threads, items));
-    std::vector<std::thread> pool;
-    for (unsigned k = 0; k < t; ++k)
-      pool.emplace_back([=] {
-        for (uint32_t i = uint32_t(uint64_t(items) * k / t); i < uint32_t(uint64_t(items) * (k + 1) / t); ++i) fn(i);
-      });
-    for (auto& th : pool) th.join();
-  };
-  run(out.count, [&](uint32_t v) { setups[v] = mesh::setup_view(d, v); });
-  run(out.count * ty, [&](uint32_t item) {
+  parallel_for(out.count, threads, [&](uint32_t v) { setups[v] = mesh::setup_view(d, v); }, 1);
+  parallel_for(out.count * ty, threads, [&](uint32_t item) {
     const uint32_t v = item / ty, row = item % ty;
     for (uint32_t a = 0; a < tx; ++a)
       mesh::shade_tile(d, setups[v], a, row, out.coverage.data() + v * n, out.pixels.data() + v * n * d.channels);
-  });
-  return out;
+  }, 1);
 }
 
 }  // namespace uvpress::engine

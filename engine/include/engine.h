@@ -239,10 +239,18 @@ class Engine {
   virtual void score_views(ViewSet& views, const ViewCandidate* candidates, size_t count, float* gmsd,
                            ViewImages* images = nullptr, float* lattice = nullptr) = 0;
 
-  // Whole-mesh renders (see MeshRenderDesc). The default is the CPU reference
+  // Whole-mesh renders (see MeshRenderDesc) into `out`, every pixel written, its storage
+  // reused when it is large enough: eval renders the same views at every cost, and a fresh
+  // result (a quarter of a gigabyte for Duck's 20 views) cost more in page faults and zeroing
+  // than the rasterization did. The default is the CPU reference
   // (engine/cpu/render_mesh.cpp); the Vulkan backend runs render_mesh.comp. Throws
   // EngineError for a description that breaks the limits there.
-  virtual MeshRenders render_mesh(const MeshRenderDesc& desc);
+  virtual void render_mesh(const MeshRenderDesc& desc, MeshRenders& out);
+  MeshRenders render_mesh(const MeshRenderDesc& desc) {
+    MeshRenders out;
+    render_mesh(desc, out);
+    return out;
+  }
 
   // Re-bake sampling (see RebakeTexelsDesc): writes `channels` floats for every owned texel
   // of `texels` (width * height * channels), leaves the others untouched. The CPU backend

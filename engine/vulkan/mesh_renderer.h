@@ -16,8 +16,8 @@ class MeshRenderer {
  public:
   MeshRenderer(vk::Context& context, vk::Sequence& sequence, uint64_t max_buffer);
 
-  // Every view of d (engine.h, MeshRenderDesc), in chunks.
-  MeshRenders render(const MeshRenderDesc& d);
+  // Every view of d (engine.h, MeshRenderDesc) into out, in chunks.
+  void render(const MeshRenderDesc& d, MeshRenders& out);
 
  private:
   vk::Buffer& buffer(std::unique_ptr<vk::Buffer>& slot, uint64_t bytes, vk::HostAccess access = vk::HostAccess::Write) {

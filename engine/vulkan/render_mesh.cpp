@@ -18,10 +18,10 @@ MeshRenderer::MeshRenderer(vk::Context& context, vk::Sequence& sequence, uint64_
       kernel_(context, render_mesh_spv, sizeof(render_mesh_spv), 6, sizeof(shader::MeshPush), shader::kMeshTile,
               shader::kMeshTile) {}
 
-MeshRenders MeshRenderer::render(const MeshRenderDesc& d) {
-  MeshRenders out = sized_mesh_renders(d);
+void MeshRenderer::render(const MeshRenderDesc& d, MeshRenders& out) {
+  size_mesh_renders(d, out);
   const uint64_t n = uint64_t(d.width) * d.height;
-  if (out.count == 0) return out;
+  if (out.count == 0) return;
   const uint64_t tex_bytes = 4ull * mip_chain_texels(d.texture_width, d.texture_height, d.mip_levels) * d.channels;
   if (tex_bytes > max_buffer_)
     throw EngineError("Vulkan render_mesh: the texture exceeds the device's largest buffer");
@@ -71,7 +71,6 @@ MeshRenders MeshRenderer::render(const MeshRenderDesc& d) {
     std::memcpy(out.pixels.data() + first * n * d.channels, pixels.data<float>(), 4 * n * d.channels * count);
     first += count;
   }
-  return out;
 }
 
 }  // namespace uvpress::engine

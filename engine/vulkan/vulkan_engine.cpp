@@ -253,9 +253,10 @@ class VulkanEngine final : public Engine {
   }
 
   // Whole-mesh renders: see MeshRenderer.
-  MeshRenders render_mesh(const MeshRenderDesc& desc) override {
+  using Engine::render_mesh;
+  void render_mesh(const MeshRenderDesc& desc, MeshRenders& out) override {
     if (!mesh_renderer_) mesh_renderer_ = std::make_unique<MeshRenderer>(context_, sequence_, max_buffer_);
-    return mesh_renderer_->render(desc);
+    mesh_renderer_->render(desc, out);
   }
 
   // Re-bake sampling: see Rebaker.

@@ -397,13 +397,24 @@ size_t total_pixels(const std::vector<ViewFrame>& frames) {
   return frames.empty() ? 0 : frames.back().offset + frames.back().pixels();
 }
 
+// The storage a chain of renders reuses: the engine's result and the views stitched from its
+// tiles. Allocated afresh for every chunk, these buffers (up to kChunkPixels a chunk) cost
+// about half of eval's time in page faults and zeroing (Duck on the CPU backend), more than
+// the rasterization; an evaluation keeps one per level of nesting (Setup).
+struct RenderScratch {
+  engine::MeshRenders renders;
+  std::vector<float> pixels;
+  std::vector<uint32_t> coverage;
+};
+
 // Renders every view of `m` textured with `tex`, chunk by chunk: fn(first view, views,
 // pixels, coverage) with the `views` views' images (each width x height x channels, one
-// after the other) and their covered triangles. Chunks hold views of one tile size, at most
-// `per_chunk` of them (0: about kChunkPixels).
+// after the other) and their covered triangles, in `scratch` (valid until the next render
+// into it). Chunks hold views of one tile size, at most `per_chunk` of them (0: about
+// kChunkPixels).
 template <class Fn>
 void render_views(engine::Engine& engine, const LayoutMesh& m, const Texture& tex, const std::vector<ViewFrame>& frames,
-                  Timing& timing, Fn&& fn, size_t per_chunk = 0) {
+                  Timing& timing, RenderScratch& scratch, Fn&& fn, size_t per_chunk = 0) {
   const uint32_t C = tex.channels;
   engine::MeshRenderDesc d;
   d.positions = m.positions.data(), d.vertex_count = m.positions.size() / 3;
@@ -412,8 +423,9 @@ void render_views(engine::Engine& engine, const LayoutMesh& m, const Texture& te
   d.texture = tex.texels.data(), d.texture_width = tex.width, d.texture_height = tex.height;
   d.channels = C, d.mip_levels = tex.levels;
   d.repeat = m.repeat;
-  std::vector<float> stitched;
-  std::vector<uint32_t> stitched_coverage;
+  engine::MeshRenders& r = scratch.renders;
+  std::vector<float>& stitched = scratch.pixels;
+  std::vector<uint32_t>& stitched_coverage = scratch.coverage;
   for (size_t first = 0; first < frames.size();) {
     const ViewFrame& f0 = frames[first];
     const size_t limit = per_chunk ? per_chunk : std::max<size_t>(1, kChunkPixels / f0.pixels());
@@ -430,7 +442,7 @@ void render_views(engine::Engine& engine, const LayoutMesh& m, const Texture& te
         for (uint32_t a = 0; a < frames[v].tiles_x; ++a) d.cameras.push_back(frames[v].tile(a, b));
     }
     const Stopwatch t0;
-    auto r = engine.render_mesh(d);
+    engine.render_mesh(d, r);
     timing.render += t0.seconds();
     if (!tiled) {
       fn(first, views, r.pixels.data(), r.coverage.data());
@@ -516,6 +528,9 @@ struct Setup {
   std::string shading_warning;   // auto fell back to unlit: why
   LightRig rig;
   ReferenceViews ref_views;
+  // render_views' storage, kept across costs and candidates: the views' renders, and the
+  // maps' renders nested inside them when lit. Setup serves one thread at a time.
+  mutable RenderScratch view_scratch, map_scratch;
   double image_texels = 0, chart_texels = 0;
   double radius = 0;  // the largest extent of the bounding box
   std::optional<io::AstcOptions> codec;  // EvalOptions::codec
@@ -556,7 +571,7 @@ template <class Fn>
 void render_scored_views(engine::Engine& engine, const Setup& s, const LayoutMesh& m, const LayoutTextures& tex,
                          const std::vector<ViewFrame>& frames, Timing& timing, Fn&& fn) {
   if (!s.lit) {
-    render_views(engine, m, tex.driving, frames, timing,
+    render_views(engine, m, tex.driving, frames, timing, s.view_scratch,
                  [&](size_t first, size_t views, const float* px, const uint32_t*) { fn(first, views, px, nullptr); });
     return;
   }
@@ -568,12 +583,12 @@ void render_scored_views(engine::Engine& engine, const Setup& s, const LayoutMes
   std::vector<std::vector<float>> map_px(tex.maps.size());
   std::vector<float> lit;
   render_views(
-      engine, m, tex.driving, frames, timing,
+      engine, m, tex.driving, frames, timing, s.view_scratch,
       [&](size_t first, size_t views, const float* px, const uint32_t* coverage) {
         const std::vector<ViewFrame> chunk(frames.begin() + long(first), frames.begin() + long(first + views));
         const size_t base = chunk.front().offset, n = total_pixels(chunk) - base;
         for (size_t k = 0; k < tex.maps.size(); ++k)
-          render_views(engine, m, tex.maps[k], chunk, timing,
+          render_views(engine, m, tex.maps[k], chunk, timing, s.map_scratch,
                        [&](size_t, size_t, const float* mp, const uint32_t*) { map_px[k].assign(mp, mp + n * 3); },
                        views);
         const Stopwatch t0;
@@ -933,7 +948,8 @@ Image contact_sheet(engine::Engine& engine, const LayoutMesh& m, const Image& te
   const Texture tex = view_texture(texture, filter, true);
   std::vector<float> pixels(cameras.size() * thumb * thumb * 3);
   Timing ignored;
-  render_views(engine, m, tex, square_frames(cameras, thumb), ignored, [&](size_t first, size_t views, const float* px, const uint32_t*) {
+  RenderScratch scratch;
+  render_views(engine, m, tex, square_frames(cameras, thumb), ignored, scratch, [&](size_t first, size_t views, const float* px, const uint32_t*) {
     std::copy(px, px + views * thumb * thumb * 3, pixels.data() + first * thumb * thumb * 3);
   });
   Image sheet;

@@ -96,6 +96,39 @@ TEST_CASE("render_mesh: Vulkan (lavapipe, validation on) matches the CPU oracle"
   CHECK(vk->validation_errors() == 0);
 }
 
+TEST_CASE("render_mesh: into reused storage, every pixel is the fresh render's, on both backends", "[eval][engine][vulkan]") {
+  // Eval renders the same views at every cost into one MeshRenders: nothing of an earlier
+  // render (another texture, more views, more channels, a larger image) may survive.
+  DemoMesh d = demo();
+  const std::vector<float> lum = luminance_plane(d.texture);
+  std::vector<float> bright(d.texture.pixels.size(), 0.9f);
+  std::vector<std::unique_ptr<engine::Engine>> engines;
+  engines.push_back(engine::make_cpu_engine({}));
+  try {
+    engines.push_back(test::lavapipe());
+  } catch (const engine::EngineError& e) {
+    WARN("skipped the Vulkan half: no lavapipe: " << e.what());
+  }
+  for (auto& e : engines) {
+    INFO(e->device().backend);
+    auto big = render_desc(d, bright, 3, 96, false);  // every covered pixel 0.9, 3 channels
+    auto small = render_desc(d, lum, 1, 72, true);
+    small.cameras.resize(7);
+    engine::MeshRenders reused;
+    e->render_mesh(big, reused);
+    const size_t capacity = reused.pixels.capacity();
+    e->render_mesh(small, reused);
+    const engine::MeshRenders fresh = e->render_mesh(small);
+    CHECK(reused.pixels.capacity() == capacity);  // the storage was kept
+    REQUIRE(reused.count == 7);
+    CHECK(reused.coverage == fresh.coverage);
+    CHECK(reused.pixels == fresh.pixels);
+    e->render_mesh(big, reused);  // and back to the larger render
+    CHECK(reused.pixels == e->render_mesh(big).pixels);
+    CHECK(e->validation_errors() == 0);
+  }
+}
+
 TEST_CASE("render_mesh: the nearer of two overlapping triangles wins, ties to the lower index", "[eval][engine]") {
   // Two parallel quads facing the camera (z = 0 and z = 0.5, the second nearer), each with
   // a constant texel of its own.
