@@ -451,8 +451,18 @@ void render_views(engine::Engine& engine, const LayoutMesh& m, const Texture& te
     }
     const size_t base = f0.offset;
     const size_t chunk = frames[first + views - 1].offset + frames[first + views - 1].pixels() - base;
-    stitched.assign(chunk * C, 0.0f);
-    stitched_coverage.assign(chunk, engine::kNoMeshTriangle);
+    // Tiles cover a view whose sides they divide; the pixels past the last tile of any other
+    // view are empty.
+    bool covered = true;
+    for (size_t v = first; v < first + views; ++v)
+      covered = covered && frames[v].tiles_x * frames[v].tile_width() == frames[v].width &&
+                frames[v].tiles_y * frames[v].tile_height() == frames[v].height;
+    if (covered) {
+      stitched.resize(chunk * C), stitched_coverage.resize(chunk);
+    } else {
+      stitched.assign(chunk * C, 0.0f);
+      stitched_coverage.assign(chunk, engine::kNoMeshTriangle);
+    }
     const size_t T = size_t(d.width) * d.height;
     size_t tile_index = 0;
     for (size_t v = first; v < first + views; ++v) {
