@@ -187,6 +187,28 @@ TEST_CASE("CLI: bench luminance prints one JSON line per backend, validation cle
   CHECK(measured + skipped == 3);   // cpu, then a Vulkan GPU and lavapipe, each measured or said skipped
 }
 
+TEST_CASE("CLI: bench views --asset measures that asset's own views", "[cli]") {
+  // A smaller demo asset written as a file: its views are not the embedded demo's 4,608.
+  test::Scratch dir("cli-bench-views");
+  io::save_gltf(pipeline::make_demo_asset({6, 64}), (dir / "small.glb").string());
+  auto r = run_uvpress("--device cpu bench views --asset " + quoted(dir / "small.glb") + " --batch 40 --size 16");
+  INFO(r.err);
+  REQUIRE(r.exit_code == 0);
+  std::istringstream lines(r.out);
+  std::string line;
+  REQUIRE(std::getline(lines, line));
+  auto j = nlohmann::json::parse(line);
+  CHECK(j["asset"] == "small");
+  CHECK(j["part"] == 0);
+  CHECK(j["views"] == 2 * 6 * 6);  // one view a triangle: a 6 x 6 grid of quads, 16-px views resolve its texels
+  CHECK(j["batch"] == 40);
+  CHECK(j["views_per_s"].get<double>() > 0);
+  CHECK_FALSE(std::getline(lines, line));  // one primitive, one backend, one batch
+  auto bad = run_uvpress("--device cpu bench views --asset " + quoted(dir / "missing.glb"));
+  CHECK(bad.exit_code == 1);
+  CHECK_THAT(bad.err, Catch::Contains("missing.glb"));
+}
+
 TEST_CASE("CLI: reparam's summary line says when the density cap kept it under --cost, and counts the triangle stage", "[cli][reparam]") {
   test::Scratch dir("cli-reparam-summary");
   io::save_gltf(pipeline::make_demo_asset({12, 128}), (dir / "demo.glb").string());

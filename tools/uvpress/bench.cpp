@@ -1,6 +1,12 @@
 // uvpress bench <name>: the parent command and what the benchmarks share.
 #include "bench.h"
 
+#include "core/error.h"
+#include "io/gltf_io.h"
+#include "io/image_io.h"
+#include "pipeline/demo_asset.h"
+
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 
@@ -54,6 +60,28 @@ void add_bench(CLI::App& app, Globals& g) {
   add_bench_quality(*bench, g);
   add_bench_rebake_lsq(*bench, g);
   add_bench_pack(*bench, g);
+}
+
+TexturedAsset load_textured_asset(const std::string& spec) {
+  io::GltfFile file = spec == "demo" ? pipeline::make_demo_asset() : io::load_gltf(spec);
+  io::Asset asset = io::build_asset(file);
+  TexturedAsset a;
+  a.name = spec == "demo" ? "demo" : std::filesystem::path(spec).stem().string();
+  std::vector<std::pair<int, int>> seen;
+  for (const auto& image : asset.images)
+    for (const auto& use : image.uses) {
+      if (use.role != io::TextureRole::BaseColor || use.tiled) continue;
+      if (std::find(seen.begin(), seen.end(), std::pair{use.primitive, use.tex_coord}) != seen.end()) continue;
+      seen.push_back({use.primitive, use.tex_coord});
+      TexturedPart w;
+      w.primitive = asset.primitives[size_t(use.primitive)];
+      w.tex_coord = use.tex_coord;
+      w.texture = io::decode_image(file.image_bytes[size_t(image.index)], spec);
+      w.luminance = luminance_plane(w.texture);
+      a.parts.push_back(std::move(w));
+    }
+  if (a.parts.empty()) throw InputError(spec, "no primitive samples a baseColor texture");
+  return a;
 }
 
 }  // namespace uvpress::cli

@@ -4,6 +4,9 @@
 
 #include "cli.h"
 
+#include "core/image.h"
+#include "io/asset.h"
+
 #include <string>
 #include <utility>
 #include <vector>
@@ -26,6 +29,23 @@ std::vector<Backend> available_backends(const Globals& g, const char* bench);
 // (unless only_given), then each of `extra`.
 std::vector<std::pair<std::string, std::string>> bench_assets(const std::string& shared, bool only_given,
                                                               const std::vector<std::string>& extra);
+
+// One primitive that samples a baseColor texture (not tiled), with that texture.
+struct TexturedPart {
+  io::Primitive primitive;
+  int tex_coord = 0;
+  Image texture;
+  std::vector<float> luminance;
+};
+
+// An asset's textured primitives: each (primitive, UV set) that a baseColor image samples,
+// once. `spec`: "demo" (the embedded demo asset) or a glTF file; name: "demo" or the file's
+// stem. Throws InputError when nothing samples a baseColor texture.
+struct TexturedAsset {
+  std::string name;
+  std::vector<TexturedPart> parts;
+};
+TexturedAsset load_textured_asset(const std::string& spec);
 
 // One file per benchmark; each adds its subcommand under `bench`.
 void add_bench_luminance(CLI::App& bench, Globals& g);

@@ -3,58 +3,16 @@
 // split, per backend, on the demo asset and on any glTF given with --asset.
 #include "bench.h"
 
-#include "core/error.h"
 #include "core/quantile.h"
-#include "io/asset.h"
-#include "io/image_io.h"
 #include "perceptual/triangle_stage.h"
-#include "pipeline/demo_asset.h"
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <filesystem>
 
 namespace uvpress::cli {
 
 namespace {
-
-// One primitive that samples a baseColor texture (not tiled), with that texture.
-struct Workload {
-  io::Primitive primitive;
-  int tex_coord = 0;
-  Image texture;
-  std::vector<float> luminance;
-};
-
-struct AssetWork {
-  std::string name;
-  std::vector<Workload> parts;
-};
-
-// Every textured primitive of an asset: each (primitive, UV set) that a baseColor image
-// samples, once.
-AssetWork load_asset(const std::string& spec) {
-  io::GltfFile file = spec == "demo" ? pipeline::make_demo_asset() : io::load_gltf(spec);
-  io::Asset asset = io::build_asset(file);
-  AssetWork a;
-  a.name = spec == "demo" ? "demo" : std::filesystem::path(spec).stem().string();
-  std::vector<std::pair<int, int>> seen;
-  for (const auto& image : asset.images)
-    for (const auto& use : image.uses) {
-      if (use.role != io::TextureRole::BaseColor || use.tiled) continue;
-      if (std::find(seen.begin(), seen.end(), std::pair{use.primitive, use.tex_coord}) != seen.end()) continue;
-      seen.push_back({use.primitive, use.tex_coord});
-      Workload w;
-      w.primitive = asset.primitives[size_t(use.primitive)];
-      w.tex_coord = use.tex_coord;
-      w.texture = io::decode_image(file.image_bytes[size_t(image.index)], spec);
-      w.luminance = luminance_plane(w.texture);
-      a.parts.push_back(std::move(w));
-    }
-  if (a.parts.empty()) throw InputError(spec, "no primitive samples a baseColor texture");
-  return a;
-}
 
 // Standard deviation of the source luminance over a triangle (bilinear samples at 66
 // barycentric grid points): a triangle is "detailed" when it is at least kDetailed.
@@ -87,8 +45,8 @@ double luminance_spread(const perceptual::TriangleViewInput& in, const std::vect
 
 void bench_triangles(const Globals& g, const std::vector<std::string>& specs, uint32_t limit, int evaluations,
                      bool early_stop) {
-  std::vector<AssetWork> work;
-  for (const auto& a : specs) work.push_back(load_asset(a));
+  std::vector<TexturedAsset> work;
+  for (const auto& a : specs) work.push_back(load_textured_asset(a));
   auto backends = available_backends(g, "triangles");
   for (const auto& a : work) {
     size_t total = 0;

@@ -1,12 +1,10 @@
 // uvpress bench views: candidates per second for render + least-squares bake + GMSD of
-// per-triangle views, on every backend, on the demo asset's views (its real mesh and
-// texture), batch sizes 1K / 10K / 50K by default.
+// per-triangle views, on every backend, on the views reparam makes of an asset (the demo
+// asset by default, or --asset: every triangle of each textured primitive, so the views'
+// sizes are that asset's), batch sizes 1K / 10K / 50K by default.
 #include "bench.h"
 
-#include "io/asset.h"
-#include "io/image_io.h"
 #include "perceptual/triangle_view.h"
-#include "pipeline/demo_asset.h"
 
 #include <chrono>
 #include <cmath>
@@ -17,16 +15,14 @@ namespace uvpress::cli {
 
 namespace {
 
-void bench_views(const Globals& g, const std::vector<uint32_t>& batches, uint32_t size, int repeats) {
-  io::GltfFile demo = pipeline::make_demo_asset();
-  io::Asset asset = io::build_asset(demo);
-  const io::Primitive& p = asset.primitives.at(0);
-  Image tex = io::decode_image(demo.image_bytes[0], "demo");
-  std::vector<float> lum = luminance_plane(tex);
+// One line per backend and batch for the views of one textured primitive.
+void bench_part(const Globals& g, const std::string& name, size_t part, const TexturedPart& w,
+                const std::vector<uint32_t>& batches, uint32_t size, int repeats) {
+  const io::Primitive& p = w.primitive;
   perceptual::TriangleViewInput in{p.positions.data(), p.vertex_count(), p.indices.data(), p.triangle_count(),
-                                   p.uv_sets[0].uv.data(), tex.width, tex.height};
+                                   p.uv_sets[size_t(w.tex_coord)].uv.data(), w.texture.width, w.texture.height};
   engine::ViewSetDesc desc = perceptual::make_triangle_views(in, size).desc;
-  desc.texture = lum.data(), desc.texture_width = tex.width, desc.texture_height = tex.height;
+  desc.texture = w.luminance.data(), desc.texture_width = w.texture.width, desc.texture_height = w.texture.height;
 
   // Candidates as the triangle stage draws them: lambda in (0, 1], alpha, beta in [0, pi/2).
   std::mt19937 rng(7);
@@ -64,7 +60,8 @@ void bench_views(const Globals& g, const std::vector<uint32_t>& batches, uint32_
                                      {"device", d.name},
                                      {"device_type", d.type},
                                      {"threads", d.threads},
-                                     {"asset", "demo"},
+                                     {"asset", name},
+                                     {"part", part},
                                      {"views", desc.views.size()},
                                      {"batch", batch},
                                      {"size", size},
@@ -78,6 +75,13 @@ void bench_views(const Globals& g, const std::vector<uint32_t>& batches, uint32_
   }
 }
 
+void bench_views(const Globals& g, const std::string& spec, const std::vector<uint32_t>& batches, uint32_t size,
+                 int repeats) {
+  const TexturedAsset asset = load_textured_asset(spec);
+  for (size_t part = 0; part < asset.parts.size(); ++part)
+    bench_part(g, asset.name, part, asset.parts[part], batches, size, repeats);
+}
+
 }  // namespace
 
 void add_bench_views(CLI::App& bench, Globals& g) {
@@ -85,12 +89,15 @@ void add_bench_views(CLI::App& bench, Globals& g) {
   auto batches = std::make_shared<std::vector<uint32_t>>(std::vector<uint32_t>{1000, 10000, 50000});
   auto size = std::make_shared<uint32_t>(64);
   auto repeats = std::make_shared<int>(1);
+  auto asset = std::make_shared<std::string>("demo");
+  cmd->add_option("--asset", *asset, "'demo' or a glTF file: the views of every triangle of each textured primitive")
+      ->capture_default_str();
   cmd->add_option("--batch", *batches, "Candidates per batch (several allowed)")->capture_default_str();
   cmd->add_option("--size", *size, "View side in pixels (even, 8..64)")->capture_default_str()->check(CLI::Range(8u, 64u));
   cmd->add_option("--repeat", *repeats, "Timed repetitions per configuration")->capture_default_str()->check(CLI::Range(1, 100));
-  cmd->callback([&g, batches, size, repeats] {
-    g.action = [&g, batches, size, repeats] {
-      bench_views(g, *batches, *size, *repeats);
+  cmd->callback([&g, asset, batches, size, repeats] {
+    g.action = [&g, asset, batches, size, repeats] {
+      bench_views(g, *asset, *batches, *size, *repeats);
       return 0;
     };
   });
