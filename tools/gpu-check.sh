@@ -36,6 +36,7 @@ cd /tmp
 UVPRESS_TEST_VULKAN=gpu step 90 "$G/bin/uvpress_tests" "[vulkan]" >"$OUT/tests.log" 2>&1
 tail -3 "$OUT/tests.log"
 step 45 "$B" bench views --batch 1000 --batch 10000 --batch 50000 | tee "$OUT/views.jsonl"
+step 45 "$B" bench views --asset "$A/Fox/glTF/Fox.gltf" --batch 10000 | tee "$OUT/views-fox.jsonl"
 UVPRESS_VALIDATION=1 step 30 "$B" --device gpu bench views --batch 1000 2>&1 | tail -3
 step 90 "$B" bench triangles --asset demo --asset "$A/Fox/glTF/Fox.gltf" --triangles 256 | tee "$OUT/triangles.jsonl"
 step 30 "$B" bench luminance | tee "$OUT/luminance.jsonl"
