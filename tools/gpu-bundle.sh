@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Packs build/tools/uvpress and build/tests/uvpress_tests with the shared libraries they need
-# into DIR (default .gpu; add it to .git/info/exclude), with the Vulkan loader, glvnd and the
+# into DIR (default .gpu, git-ignored), with the Vulkan loader, glvnd and the
 # validation layer as Debian packages and the Duck and Fox sample assets, for a machine that
 # has none of the Debian packages: a lent GPU machine, where tools/gpu-check.sh runs it.
 # OpenImageIO links every codec plugin Debian builds (ffmpeg, OpenCV, OpenVDB, GDAL through
