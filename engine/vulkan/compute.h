@@ -71,8 +71,9 @@ class Context {
 // What the host does with a buffer's contents, which decides the memory it lives in. On a
 // discrete GPU with resizable BAR the device-local, host-visible memory takes the host's writes
 // at bus speed, but the host reads it uncached, across the bus, at tens of MB/s: on an H200,
-// eval's 20 views of Duck (1248^2 luminance floats and coverage, 250 MB) took 11.9 s to read back. A buffer the host reads
-// lives in host-cached memory instead, which the device writes across the bus once. On
+// eval's 20 views of Duck (1248^2 luminance floats and coverage, 250 MB) took 11.9 s to read
+// back. A buffer the host reads lives in host-cached memory instead, which the device writes
+// across the bus once. On
 // lavapipe and unified-memory GPUs one memory type has every property, so both are the same.
 enum class HostAccess {
   Write,  // the host writes it (inputs) or never touches it (scratch): device-local

@@ -20,9 +20,6 @@ class MeshRenderer {
   void render(const MeshRenderDesc& d, MeshRenders& out);
 
  private:
-  vk::Buffer& buffer(std::unique_ptr<vk::Buffer>& slot, uint64_t bytes, vk::HostAccess access = vk::HostAccess::Write) {
-    return vk::reuse(context_, slot, bytes, access);
-  }
 
   vk::Context& context_;
   vk::Sequence& sequence_;

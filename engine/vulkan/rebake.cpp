@@ -25,16 +25,16 @@ void Rebaker::run(const RebakeTexelsDesc& d, float* texels) {
   for (uint32_t b = 0; b < 4; ++b) {
     const uint64_t first = b * split, count = first < n_src ? std::min(split, n_src - first) : 0;
     if (count == 0) {
-      src[b] = &buffer(dummy_, 16);
+      src[b] = &vk::reuse(context_, dummy_, 16);
       continue;
     }
-    vk::Buffer& s = buffer(source_[b], 4ull * C * count);
+    vk::Buffer& s = vk::reuse(context_, source_[b], 4ull * C * count);
     std::memcpy(s.data<float>(), d.source + first * C, 4ull * C * count);
     src[b] = &s;
   }
   const uint64_t tiles = uint64_t(tx) * ty;
   if (4 * (tiles + 1) > max_buffer_) throw EngineError("Vulkan rebake_texels: too many tiles for one buffer");
-  vk::Buffer& starts = buffer(starts_, 4 * (tiles + 1));
+  vk::Buffer& starts = vk::reuse(context_, starts_, 4 * (tiles + 1));
   std::memcpy(starts.data<uint32_t>(), d.tile_start, 4 * (tiles + 1));
 
   const uint64_t row_texels = uint64_t(W) * T;  // texels per tile row (the last may hold fewer)
@@ -58,9 +58,10 @@ void Rebaker::run(const RebakeTexelsDesc& d, float* texels) {
     const uint64_t n_entries = entries_of(row0, row0 + rows);
     const uint32_t y0 = row0 * T, y1 = std::min(H, (row0 + rows) * T);
     const uint64_t n_texels = uint64_t(y1 - y0) * W;
-    vk::Buffer& entries = buffer(entries_, std::max<uint64_t>(16, sizeof(shader::RebakeEntry) * n_entries));
-    vk::Buffer& owner = buffer(owner_, 4 * n_texels);
-    vk::Buffer& out = buffer(texels_, 4ull * C * n_texels, vk::HostAccess::Read);
+    vk::Buffer& entries =
+        vk::reuse(context_, entries_, std::max<uint64_t>(16, sizeof(shader::RebakeEntry) * n_entries));
+    vk::Buffer& owner = vk::reuse(context_, owner_, 4 * n_texels);
+    vk::Buffer& out = vk::reuse(context_, texels_, 4ull * C * n_texels, vk::HostAccess::Read);
     shader::RebakeEntry* e = entries.data<shader::RebakeEntry>();
     for (uint64_t tile = uint64_t(row0) * tx; tile < uint64_t(row0 + rows) * tx; ++tile) {
       const double ox = double((tile % tx) * T), oy = double((tile / tx) * T);

@@ -39,9 +39,6 @@ class Rebaker {
   // Triangle t in the frame of the tile whose corner is (ox, oy), computed in double.
   static shader::RebakeEntry make_entry(const RebakeTriangle& t, double ox, double oy);
 
-  vk::Buffer& buffer(std::unique_ptr<vk::Buffer>& slot, uint64_t bytes, vk::HostAccess access = vk::HostAccess::Write) {
-    return vk::reuse(context_, slot, bytes, access);
-  }
 
   vk::Context& context_;
   vk::Sequence& sequence_;

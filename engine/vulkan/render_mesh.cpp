@@ -25,7 +25,7 @@ void MeshRenderer::render(const MeshRenderDesc& d, MeshRenders& out) {
   const uint64_t tex_bytes = 4ull * mip_chain_texels(d.texture_width, d.texture_height, d.mip_levels) * d.channels;
   if (tex_bytes > max_buffer_)
     throw EngineError("Vulkan render_mesh: the texture exceeds the device's largest buffer");
-  vk::Buffer& texture = buffer(texture_, tex_bytes);
+  vk::Buffer& texture = vk::reuse(context_, texture_, tex_bytes);
   std::memcpy(texture.data<float>(), d.texture, tex_bytes);
   const uint32_t tx = mesh::tiles_x(d), ty = mesh::tiles_y(d);
   const uint64_t bins = uint64_t(tx) * ty;
@@ -47,11 +47,11 @@ void MeshRenderer::render(const MeshRenderDesc& d, MeshRenders& out) {
         throw EngineError("Vulkan render_mesh: one view exceeds the device's largest buffer");
       tri = t2, items = i2, ++count;
     }
-    vk::Buffer& triangles = buffer(triangles_, std::max<uint64_t>(tri, 4));
-    vk::Buffer& offsets = buffer(offsets_, 4 * (bins * count + 1));
-    vk::Buffer& bin_items = buffer(items_, std::max<uint64_t>(items, 4));
-    vk::Buffer& coverage = buffer(coverage_, 4 * n * count, vk::HostAccess::Read);
-    vk::Buffer& pixels = buffer(pixels_, 4 * n * d.channels * count, vk::HostAccess::Read);
+    vk::Buffer& triangles = vk::reuse(context_, triangles_, std::max<uint64_t>(tri, 4));
+    vk::Buffer& offsets = vk::reuse(context_, offsets_, 4 * (bins * count + 1));
+    vk::Buffer& bin_items = vk::reuse(context_, items_, std::max<uint64_t>(items, 4));
+    vk::Buffer& coverage = vk::reuse(context_, coverage_, 4 * n * count, vk::HostAccess::Read);
+    vk::Buffer& pixels = vk::reuse(context_, pixels_, 4 * n * d.channels * count, vk::HostAccess::Read);
     uint32_t t_base = 0, i_base = 0;
     for (uint32_t v = 0; v < count; ++v) {
       const auto& s = setups[first + v];

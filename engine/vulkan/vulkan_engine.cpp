@@ -102,9 +102,9 @@ class VulkanEngine final : public Engine {
     // RGBA8 in and float out are both 4 bytes a pixel: one image costs 4n bytes per buffer.
     const uint64_t per_chunk = std::min<uint64_t>(b.count, max_buffer_ / (4 * n));
     if (per_chunk == 0) throw EngineError("Vulkan: one image is larger than the device's largest buffer");
-    vk::Buffer& rgba = buffer(rgba_, 4 * n * per_chunk);
-    vk::Buffer& full = buffer(full_, 4 * n * per_chunk, vk::HostAccess::Read);
-    vk::Buffer& half = buffer(half_, 4 * n2 * per_chunk, vk::HostAccess::Read);
+    vk::Buffer& rgba = vk::reuse(context_, rgba_, 4 * n * per_chunk);
+    vk::Buffer& full = vk::reuse(context_, full_, 4 * n * per_chunk, vk::HostAccess::Read);
+    vk::Buffer& half = vk::reuse(context_, half_, 4 * n2 * per_chunk, vk::HostAccess::Read);
     const uint32_t max_z = context_.limits().maxComputeWorkGroupCount[2];
 
     for (uint64_t first = 0; first < b.count; first += per_chunk) {
@@ -146,9 +146,9 @@ class VulkanEngine final : public Engine {
       return out;
     }
     const uint64_t per_chunk = std::min<uint64_t>(pairs.count, max_buffer_ / (4 * n));
-    vk::Buffer& a = buffer(pair_a_, 4 * n * per_chunk);
-    vk::Buffer& b = buffer(pair_b_, 4 * n * per_chunk);
-    vk::Buffer& o = buffer(pair_out_, 4 * per_chunk, vk::HostAccess::Read);
+    vk::Buffer& a = vk::reuse(context_, pair_a_, 4 * n * per_chunk);
+    vk::Buffer& b = vk::reuse(context_, pair_b_, 4 * n * per_chunk);
+    vk::Buffer& o = vk::reuse(context_, pair_out_, 4 * per_chunk, vk::HostAccess::Read);
     const uint32_t max_x = context_.limits().maxComputeWorkGroupCount[0];
     for (uint64_t first = 0; first < pairs.count; first += per_chunk) {
       const uint32_t count = uint32_t(std::min<uint64_t>(per_chunk, pairs.count - first));
@@ -217,9 +217,9 @@ class VulkanEngine final : public Engine {
     if (count == 0) return;
     const uint32_t chunk = uint32_t(
         std::min<uint64_t>({kScoreChunk, count, std::min(max_buffer_, kScoreScratchBytes) / kScoreSlotBytes}));
-    vk::Buffer& cand = buffer(candidates_, sizeof(ViewCandidate) * chunk);
-    vk::Buffer& scratch = buffer(scratch_, kScoreSlotBytes * chunk);
-    vk::Buffer& results = buffer(results_, 8ull * chunk, vk::HostAccess::Read);  // gmsd, lattice
+    vk::Buffer& cand = vk::reuse(context_, candidates_, sizeof(ViewCandidate) * chunk);
+    vk::Buffer& scratch = vk::reuse(context_, scratch_, kScoreSlotBytes * chunk);
+    vk::Buffer& results = vk::reuse(context_, results_, 8ull * chunk, vk::HostAccess::Read);  // gmsd, lattice
     for (const auto& page : set->pages) {
       // This page's candidates, in input order.
       std::vector<uint32_t> mine;
@@ -270,11 +270,6 @@ class VulkanEngine final : public Engine {
     auto b = std::make_unique<vk::Buffer>(context_, std::max<uint64_t>(bytes, 4));
     std::memcpy(b->data<uint8_t>(), data, bytes);
     return b;
-  }
-
-  // Keeps a buffer across calls and grows it only when a call needs more.
-  vk::Buffer& buffer(std::unique_ptr<vk::Buffer>& slot, uint64_t bytes, vk::HostAccess access = vk::HostAccess::Write) {
-    return vk::reuse(context_, slot, bytes, access);
   }
 
   vk::Context context_;
