@@ -61,6 +61,7 @@ std::vector<double> tutte_embedding(size_t nv, const std::vector<uint32_t>& tris
   L.setFromTriplets(triplets.begin(), triplets.end());
   solve::configure_blas_threads();
   Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Lower> solver;
+  const solve::SerialCholmod serial;
   solver.compute(L);
   if (solver.info() != Eigen::Success) throw FlattenError("Tutte embedding: the Laplacian could not be factorized");
   Eigen::MatrixXd x = solver.solve(rhs);

@@ -37,6 +37,7 @@
 #include <cstdlib>
 #include <dlfcn.h>
 #include <mutex>
+#include <omp.h>
 
 namespace uvpress::solve {
 
@@ -71,6 +72,9 @@ void configure_blas_threads() {
     if (auto set = reinterpret_cast<SetThreads>(dlsym(RTLD_DEFAULT, "openblas_set_num_threads"))) set(n);
   });
 }
+
+SerialCholmod::SerialCholmod() : levels_(omp_get_max_active_levels()) { omp_set_max_active_levels(0); }
+SerialCholmod::~SerialCholmod() { omp_set_max_active_levels(levels_); }
 
 SparseSystem::SparseSystem(size_t nv, const std::vector<uint32_t>& tris) : n_(2 * nv) {
   configure_blas_threads();
@@ -141,8 +145,12 @@ SparseSystem::SparseSystem(size_t nv, const std::vector<uint32_t>& tris) : n_(2 
   c.method[0].ordering = CHOLMOD_AMD;
   c.method[1].ordering = CHOLMOD_NESDIS;
   c.postorder = 1;
-  solver_.analyzePattern(matrix_);
+  {
+    const SerialCholmod serial;
+    solver_.analyzePattern(matrix_);
+  }
   pcg_budget_ = reuse_budget(c.fl, c.lnz, double(matrix_.nonZeros()));
+  preconditioner_.analyze(solver_.factor());
 }
 
 void SparseSystem::assemble(const std::vector<double>& hess21) {
@@ -193,9 +201,15 @@ bool SparseSystem::factorize() {
     return false;
   }
   solver_.setShift(shift());
-  solver_.factorize(matrix_);
+  {
+    const SerialCholmod serial;
+    solver_.factorize(matrix_);
+  }
   factored_ = solver_.info() == Eigen::Success;
-  if (factored_) return true;
+  if (factored_) {
+    if (pcg_budget_ > 0) preconditioner_.assign(solver_.factor());
+    return true;
+  }
   const int status = solver_.cholmod().status;
   failure_ = status == CHOLMOD_NOT_POSDEF ? "factorization failed: matrix not positive definite (CHOLMOD)"
              : status == CHOLMOD_OUT_OF_MEMORY ? "factorization failed: out of memory (CHOLMOD)"
@@ -207,6 +221,7 @@ void SparseSystem::solve(const std::vector<double>& grad, std::vector<double>& d
   Eigen::VectorXd rhs(static_cast<Eigen::Index>(n_));
   for (size_t i = 0; i < n_; ++i) rhs[long(i)] = -grad[i];
   rhs[0] = rhs[1] = 0;
+  const SerialCholmod serial;
   Eigen::VectorXd x = solver_.solve(rhs);
   d.assign(x.data(), x.data() + n_);
 }
@@ -258,9 +273,8 @@ void SparseSystem::multiply(const std::vector<double>& x, std::vector<double>& y
 }
 
 void SparseSystem::precondition(const std::vector<double>& r, std::vector<double>& z) {
-  const Eigen::Map<const Eigen::VectorXd> rhs(r.data(), long(n_));
-  const Eigen::VectorXd x = solver_.solve(rhs);
-  z.assign(x.data(), x.data() + n_);
+  z.resize(n_);
+  preconditioner_.solve(r.data(), z.data());
 }
 
 bool SparseSystem::pcg(const std::vector<double>& grad, std::vector<double>& d, double tolerance) {

@@ -11,6 +11,7 @@
 #pragma once
 
 #include "solve/pcg.h"
+#include "solve/supernodal_solve.h"
 
 #include <Eigen/CholmodSupport>
 #include <Eigen/Sparse>
@@ -68,7 +69,12 @@ class SparseSystem {
   std::vector<uint32_t> gather_start_, gather_;         // per nonzero: hess21 indices
   std::vector<uint32_t> vertex_start_, vertex_corner_;  // per vertex: 3 t + corner
   std::vector<uint32_t> pinned_entries_;  // nonzeros in the rows/columns of dofs 0 and 1
-  Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Lower> solver_;
+  // Eigen's CHOLMOD wrapper, its factor readable for the float copy.
+  struct SupernodalLLT : Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Lower> {
+    const cholmod_factor& factor() const { return *m_cholmodFactor; }
+  };
+  SupernodalLLT solver_;
+  FloatSupernodalFactor preconditioner_;  // the last factor in float, for PCG
   double diagonal_mean_ = 1;
   std::string failure_;
   int factorizations_ = 0, break_at_ = 0;
@@ -82,7 +88,7 @@ class SparseSystem {
   double shift() const { return 1e-10 * diagonal_mean_; }
   // y = (H + shift) x for the lower triangle stored in matrix_: sequential, fixed order.
   void multiply(const std::vector<double>& x, std::vector<double>& y) const;
-  // z = the last factor's inverse applied to r.
+  // z = the last factor's inverse (its float copy) applied to r.
   void precondition(const std::vector<double>& r, std::vector<double>& z);
   // PCG from d = 0; true when it converged within the budget.
   bool pcg(const std::vector<double>& grad, std::vector<double>& d, double tolerance);
@@ -94,5 +100,24 @@ class SparseSystem {
 // asks for more - faster factorizations on big machines, bit-identical only for equal N.
 // The per-triangle OpenMP loops are bit-identical for any OMP_NUM_THREADS.
 void configure_blas_threads();
+
+// CHOLMOD (Debian's build) runs parts of its supernodal factorization - the scatter of
+// each update into its ancestor supernode - as OpenMP loops with a fixed 4 threads,
+// whatever the machine. On 2 cores that oversubscribes, and most supernodes of a mesh
+// are small, so the threads mostly wake and wait: measured on camelhead subdivided once
+// and twice, a factorization takes 1.6x as long as with those loops serial. The loops only
+// scatter (each entry written by one thread), so serial gives the same bits. While an
+// object of this type lives, parallel regions opened on this thread run with one thread;
+// uvpress's own OpenMP loops never run inside CHOLMOD calls.
+class SerialCholmod {
+ public:
+  SerialCholmod();
+  ~SerialCholmod();
+  SerialCholmod(const SerialCholmod&) = delete;
+  SerialCholmod& operator=(const SerialCholmod&) = delete;
+
+ private:
+  int levels_;
+};
 
 }  // namespace uvpress::solve
