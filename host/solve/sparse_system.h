@@ -69,10 +69,6 @@ class SparseSystem {
   std::vector<uint32_t> gather_start_, gather_;         // per nonzero: hess21 indices
   std::vector<uint32_t> vertex_start_, vertex_corner_;  // per vertex: 3 t + corner
   std::vector<uint32_t> pinned_entries_;  // nonzeros in the rows/columns of dofs 0 and 1
-  // Eigen's CHOLMOD wrapper, its factor readable for the float copy.
-  struct SupernodalLLT : Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Lower> {
-    const cholmod_factor& factor() const { return *m_cholmodFactor; }
-  };
   SupernodalLLT solver_;
   FloatSupernodalFactor preconditioner_;  // the last factor in float, for PCG
   double diagonal_mean_ = 1;

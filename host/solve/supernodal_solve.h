@@ -15,12 +15,18 @@
 // buffers are added in group order, so the bits are the same for any OMP_NUM_THREADS.
 #pragma once
 
-#include <cholmod.h>
+#include <Eigen/CholmodSupport>
+#include <Eigen/Sparse>
 
 #include <cstdint>
 #include <vector>
 
 namespace uvpress::solve {
+
+// Eigen's CHOLMOD supernodal LL' of a lower-stored matrix, its factor readable.
+struct SupernodalLLT : Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Lower> {
+  const cholmod_factor& factor() const { return *m_cholmodFactor; }
+};
 
 class FloatSupernodalFactor {
  public:

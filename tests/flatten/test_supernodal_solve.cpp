@@ -1,0 +1,129 @@
+// host/solve/supernodal_solve: the float factor's preconditioner solve against CHOLMOD's
+// double solve, its subtree split, and the same bits whatever the thread count.
+#include <catch2/catch.hpp>
+
+#include "solve/sparse_system.h"
+#include "solve/supernodal_solve.h"
+
+#include <cmath>
+#include <cstring>
+#include <omp.h>
+#include <vector>
+
+using namespace uvpress::solve;
+
+namespace {
+
+double hash01(uint32_t x) {
+  uint32_t h = x * 0x8da6b343u;
+  h ^= h >> 13, h *= 0x5bd1e995u, h ^= h >> 15;
+  return (h & 0xffffff) / double(0x1000000);
+}
+
+// The shape of flatten's systems: an n x n grid's vertices, u and v coupled. Every edge
+// (a, b) adds (e_a - e_b)(e_a - e_b)' (x) M_e, M_e a 2x2 SPD matrix with anisotropy up to
+// 1:20 (the SLIM and CM proxies' weights), plus 1e-6 on the diagonal: SPD, and as badly
+// conditioned as a 2-D Laplacian of that size. Lower triangle, column-major.
+Eigen::SparseMatrix<double> grid_system(int n) {
+  const int nv = (n + 1) * (n + 1);
+  std::vector<Eigen::Triplet<double>> t;
+  auto edge = [&](int a, int b, uint32_t id) {
+    const double s1 = 1 + 19 * hash01(3 * id), s2 = 1 + hash01(3 * id + 1), angle = 6.283 * hash01(3 * id + 2);
+    const double c = std::cos(angle), s = std::sin(angle);
+    const double M[2][2] = {{s1 * c * c + s2 * s * s, (s1 - s2) * c * s}, {(s1 - s2) * c * s, s1 * s * s + s2 * c * c}};
+    for (int i = 0; i < 2; ++i)
+      for (int j = 0; j < 2; ++j) {
+        t.emplace_back(2 * a + i, 2 * a + j, M[i][j]);
+        t.emplace_back(2 * b + i, 2 * b + j, M[i][j]);
+        t.emplace_back(2 * a + i, 2 * b + j, -M[i][j]);
+        t.emplace_back(2 * b + i, 2 * a + j, -M[i][j]);
+      }
+  };
+  uint32_t id = 0;
+  for (int j = 0; j <= n; ++j)
+    for (int i = 0; i <= n; ++i) {
+      const int v = j * (n + 1) + i;
+      if (i < n) edge(v, v + 1, id++);
+      if (j < n) edge(v, v + n + 1, id++);
+      if (i < n && j < n) edge(v, v + n + 2, id++);
+    }
+  for (int k = 0; k < 2 * nv; ++k) t.emplace_back(k, k, 1e-6);
+  Eigen::SparseMatrix<double> full(2 * nv, 2 * nv);
+  full.setFromTriplets(t.begin(), t.end());
+  Eigen::SparseMatrix<double> lower = full.triangularView<Eigen::Lower>();
+  lower.makeCompressed();
+  return lower;
+}
+
+struct Factored {
+  Eigen::SparseMatrix<double> A;
+  SupernodalLLT llt;
+  FloatSupernodalFactor f;
+  explicit Factored(int n) : A(grid_system(n)) {
+    const SerialCholmod serial;
+    llt.cholmod().nmethods = 1;
+    llt.cholmod().method[0].ordering = CHOLMOD_NESDIS;
+    llt.compute(A);
+    REQUIRE(llt.info() == Eigen::Success);
+    f.analyze(llt.factor());
+    f.assign(llt.factor());
+  }
+};
+
+std::vector<double> wave(size_t n, double k) {
+  std::vector<double> r(n);
+  for (size_t i = 0; i < n; ++i) r[i] = std::sin(k * double(i)) + 0.1 * hash01(uint32_t(i));
+  return r;
+}
+
+}  // namespace
+
+TEST_CASE("solve: the float factor's solve is CHOLMOD's double solve within float rounding, split into subtrees",
+          "[flatten][solve]") {
+  Factored s(160);  // 25,921 vertices, 51,842 dofs
+  const size_t n = size_t(s.A.rows());
+  INFO("groups " << s.f.groups() << ", top share " << s.f.top_share());
+  CHECK(s.f.groups() == 4);
+  CHECK(s.f.top_share() > 0);
+  CHECK(s.f.top_share() < 0.25);
+  for (double k : {0.001, 0.37}) {  // smooth and oscillating right-hand sides
+    const std::vector<double> r = wave(n, k);
+    std::vector<double> z(n);
+    s.f.solve(r.data(), z.data());
+    const Eigen::VectorXd x = s.llt.solve(Eigen::Map<const Eigen::VectorXd>(r.data(), long(n)));
+    double err = 0, norm = 0, rz = 0;
+    for (size_t i = 0; i < n; ++i) err += (z[i] - x[long(i)]) * (z[i] - x[long(i)]), norm += x[long(i)] * x[long(i)];
+    for (size_t i = 0; i < n; ++i) rz += r[i] * z[i];
+    INFO("k " << k << ": relative error " << std::sqrt(err / norm));
+    CHECK(std::sqrt(err / norm) < 1e-5);
+    CHECK(std::sqrt(err / norm) > 0);  // it is the float factor, not CHOLMOD's
+    CHECK(rz > 0);
+  }
+}
+
+TEST_CASE("solve: the float factor's solve has the same bits with 1 and 2 threads", "[flatten][solve]") {
+  Factored s(160);
+  REQUIRE(s.f.groups() > 1);
+  const std::vector<double> r = wave(size_t(s.A.rows()), 0.01);
+  std::vector<double> one(r.size()), two(r.size());
+  const int threads = omp_get_max_threads();
+  omp_set_num_threads(1);
+  s.f.solve(r.data(), one.data());
+  omp_set_num_threads(2);
+  s.f.solve(r.data(), two.data());
+  omp_set_num_threads(threads);
+  CHECK(std::memcmp(one.data(), two.data(), one.size() * sizeof(double)) == 0);
+}
+
+TEST_CASE("solve: a factor too small to split is solved on one thread, as accurately", "[flatten][solve]") {
+  Factored s(12);
+  CHECK(s.f.groups() == 0);
+  CHECK(s.f.top_share() == 1.0);
+  const std::vector<double> r = wave(size_t(s.A.rows()), 0.2);
+  std::vector<double> z(r.size());
+  s.f.solve(r.data(), z.data());
+  const Eigen::VectorXd x = s.llt.solve(Eigen::Map<const Eigen::VectorXd>(r.data(), long(r.size())));
+  double err = 0, norm = 0;
+  for (size_t i = 0; i < r.size(); ++i) err += (z[i] - x[long(i)]) * (z[i] - x[long(i)]), norm += x[long(i)] * x[long(i)];
+  CHECK(std::sqrt(err / norm) < 1e-5);
+}
