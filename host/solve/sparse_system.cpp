@@ -48,6 +48,10 @@ namespace {
 // kSolveSlowdown times fewer flops per second than the BLAS-3 factorization (measured on
 // camelhead subdivided 0-2 times, OpenBLAS on one thread: a factorization costs 10-13 PCG
 // iterations there). A failed attempt may waste at most kBudgetShare of a factorization.
+// Systems from this many dofs on are factorized split in two (split_cholesky.h): from
+// camelhead subdivided once (91K dofs), where a factorization takes a fifth of a second.
+constexpr size_t kSplitMinDofs = 60000;
+
 int reuse_budget(double fl, double lnz, double nnz) {
   constexpr double kSolveSlowdown = 5, kBudgetShare = 0.5;
   return int(std::min(100.0, kBudgetShare * fl / (kSolveSlowdown * (4 * lnz + 4 * nnz))));
@@ -134,23 +138,27 @@ SparseSystem::SparseSystem(size_t nv, const std::vector<uint32_t>& tris) : n_(2 
     for (size_t c = 0; c < tris.size(); ++c) vertex_corner_[fill[tris[c]]++] = uint32_t(c);
   }
 
+  if (n_ >= kSplitMinDofs && split_.analyze(matrix_)) {
+    split_active_ = true;
+    pcg_budget_ = reuse_budget(split_.flops(), split_.entries(), double(matrix_.nonZeros()));
+    return;
+  }
   cholmod_common& c = solver_.cholmod();
-  c.print = 0;  // no warnings on stdout: a failure is reported by failure()
-  // Fill-reducing ordering: CHOLMOD tries AMD and its nested dissection (NESDIS) and keeps
-  // the one with less fill. Measured on camelhead subdivided 0-2 times (22.7K-363K faces),
-  // nested dissection needs 40 %, 60 % and 64 % fewer flops than AMD; CHOLMOD's default
-  // (AMD, METIS only when AMD's fill looks bad) took AMD on the first two. AMD stays for
-  // small meshes, where it wins and nested dissection's analysis costs more than it saves.
-  c.nmethods = 2;
-  c.method[0].ordering = CHOLMOD_AMD;
-  c.method[1].ordering = CHOLMOD_NESDIS;
-  c.postorder = 1;
+  choose_fill_ordering(c);
   {
     const SerialCholmod serial;
     solver_.analyzePattern(matrix_);
   }
   pcg_budget_ = reuse_budget(c.fl, c.lnz, double(matrix_.nonZeros()));
   preconditioner_.analyze(solver_.factor());
+}
+
+void choose_fill_ordering(cholmod_common& c) {
+  c.print = 0;  // no warnings on stdout: a failure is reported by failure()
+  c.nmethods = 2;
+  c.method[0].ordering = CHOLMOD_AMD;
+  c.method[1].ordering = CHOLMOD_NESDIS;
+  c.postorder = 1;
 }
 
 void SparseSystem::assemble(const std::vector<double>& hess21) {
@@ -200,6 +208,11 @@ bool SparseSystem::factorize() {
     failure_ = "factorization failed: " + std::to_string(bad) + " non-finite matrix entries";
     return false;
   }
+  if (split_active_) {
+    factored_ = split_.factorize(matrix_, shift());
+    failure_ = split_.failure();
+    return factored_;
+  }
   solver_.setShift(shift());
   {
     const SerialCholmod serial;
@@ -221,6 +234,11 @@ void SparseSystem::solve(const std::vector<double>& grad, std::vector<double>& d
   Eigen::VectorXd rhs(static_cast<Eigen::Index>(n_));
   for (size_t i = 0; i < n_; ++i) rhs[long(i)] = -grad[i];
   rhs[0] = rhs[1] = 0;
+  if (split_active_) {
+    d.resize(n_);
+    split_.solve(rhs.data(), d.data());
+    return;
+  }
   const SerialCholmod serial;
   Eigen::VectorXd x = solver_.solve(rhs);
   d.assign(x.data(), x.data() + n_);
@@ -274,7 +292,8 @@ void SparseSystem::multiply(const std::vector<double>& x, std::vector<double>& y
 
 void SparseSystem::precondition(const std::vector<double>& r, std::vector<double>& z) {
   z.resize(n_);
-  preconditioner_.solve(r.data(), z.data());
+  if (split_active_) split_.precondition(r.data(), z.data());
+  else preconditioner_.solve(r.data(), z.data());
 }
 
 bool SparseSystem::pcg(const std::vector<double>& grad, std::vector<double>& d, double tolerance) {

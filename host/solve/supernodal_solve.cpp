@@ -15,6 +15,8 @@
 // the buffers into y in group order, then the top. Backward: the top, then the groups.
 #include "solve/supernodal_solve.h"
 
+#include "solve/supernode_kernels.h"
+
 #include <algorithm>
 #include <cstddef>
 #include <omp.h>
@@ -157,23 +159,16 @@ void FloatSupernodalFactor::forward(int s, double* y, double* top_buffer) {
   const int c0 = super_[size_t(s)], ncols = super_[size_t(s) + 1] - c0;
   const int m = pi_[size_t(s) + 1] - pi_[size_t(s)];
   const int* rows = &s_[size_t(pi_[size_t(s)])];
-  const float* Lx = &x_[size_t(px_[size_t(s)])];
-  std::vector<double>& w = scratch_[size_t(omp_get_thread_num())];
-  double* wp = w.data();
-  for (int i = 0; i < ncols; ++i) wp[i] = y[c0 + i];
-  for (int i = ncols; i < m; ++i) wp[i] = 0;
-  for (int j = 0; j < ncols; ++j) {
-    const float* col = Lx + size_t(j) * size_t(m);
-    const double xj = wp[j] / double(col[j]);
-    wp[j] = xj;
-    for (int i = j + 1; i < m; ++i) wp[i] -= double(col[i]) * xj;
-  }
-  for (int i = 0; i < ncols; ++i) y[c0 + i] = wp[i];
+  double* w = scratch_[size_t(omp_get_thread_num())].data();
+  for (int i = 0; i < ncols; ++i) w[i] = y[c0 + i];
+  for (int i = ncols; i < m; ++i) w[i] = 0;
+  supernode_forward(&x_[size_t(px_[size_t(s)])], m, ncols, w);
+  for (int i = 0; i < ncols; ++i) y[c0 + i] = w[i];
   for (int i = ncols; i < m; ++i) {
     const int r = rows[i];
     const int slot = top_buffer ? top_slot_[size_t(r)] : -1;
-    if (slot >= 0) top_buffer[slot] += wp[i];
-    else y[r] += wp[i];
+    if (slot >= 0) top_buffer[slot] += w[i];
+    else y[r] += w[i];
   }
 }
 
@@ -182,26 +177,11 @@ void FloatSupernodalFactor::backward(int s, double* y) {
   const int c0 = super_[size_t(s)], ncols = super_[size_t(s) + 1] - c0;
   const int m = pi_[size_t(s) + 1] - pi_[size_t(s)];
   const int* rows = &s_[size_t(pi_[size_t(s)])];
-  const float* Lx = &x_[size_t(px_[size_t(s)])];
-  std::vector<double>& w = scratch_[size_t(omp_get_thread_num())];
-  double* wp = w.data();
-  for (int i = 0; i < ncols; ++i) wp[i] = y[c0 + i];
-  for (int i = ncols; i < m; ++i) wp[i] = y[rows[i]];
-  for (int j = ncols - 1; j >= 0; --j) {
-    const float* col = Lx + size_t(j) * size_t(m);
-    // Four partial sums in a fixed order: vectorizable, and the same bits everywhere.
-    double a0 = 0, a1 = 0, a2 = 0, a3 = 0;
-    int i = j + 1;
-    for (; i + 4 <= m; i += 4) {
-      a0 += double(col[i]) * wp[i];
-      a1 += double(col[i + 1]) * wp[i + 1];
-      a2 += double(col[i + 2]) * wp[i + 2];
-      a3 += double(col[i + 3]) * wp[i + 3];
-    }
-    for (; i < m; ++i) a0 += double(col[i]) * wp[i];
-    wp[j] = (wp[j] - ((a0 + a1) + (a2 + a3))) / double(col[j]);
-  }
-  for (int i = 0; i < ncols; ++i) y[c0 + i] = wp[i];
+  double* w = scratch_[size_t(omp_get_thread_num())].data();
+  for (int i = 0; i < ncols; ++i) w[i] = y[c0 + i];
+  for (int i = ncols; i < m; ++i) w[i] = y[rows[i]];
+  supernode_backward(&x_[size_t(px_[size_t(s)])], m, ncols, w);
+  for (int i = 0; i < ncols; ++i) y[c0 + i] = w[i];
 }
 
 void FloatSupernodalFactor::solve(const double* r, double* z) {

@@ -1,8 +1,10 @@
-// host/solve/supernodal_solve: the float factor's preconditioner solve against CHOLMOD's
-// double solve, its subtree split, and the same bits whatever the thread count.
+// host/solve: the float factor's preconditioner solve (supernodal_solve.h) and the
+// two-thread split factorization (split_cholesky.h) against CHOLMOD's double solve of the
+// whole matrix, the same bits whatever the thread count, and failures reported.
 #include <catch2/catch.hpp>
 
 #include "solve/sparse_system.h"
+#include "solve/split_cholesky.h"
 #include "solve/supernodal_solve.h"
 
 #include <cmath>
@@ -53,6 +55,12 @@ Eigen::SparseMatrix<double> grid_system(int n) {
   Eigen::SparseMatrix<double> lower = full.triangularView<Eigen::Lower>();
   lower.makeCompressed();
   return lower;
+}
+
+double relative_error(const std::vector<double>& z, const Eigen::VectorXd& x) {
+  double err = 0, norm = 0;
+  for (size_t i = 0; i < z.size(); ++i) err += (z[i] - x[long(i)]) * (z[i] - x[long(i)]), norm += x[long(i)] * x[long(i)];
+  return std::sqrt(err / norm);
 }
 
 struct Factored {
@@ -126,4 +134,72 @@ TEST_CASE("solve: a factor too small to split is solved on one thread, as accura
   double err = 0, norm = 0;
   for (size_t i = 0; i < r.size(); ++i) err += (z[i] - x[long(i)]) * (z[i] - x[long(i)]), norm += x[long(i)] * x[long(i)];
   CHECK(std::sqrt(err / norm) < 1e-5);
+}
+
+// The split factorization is exact (double, up to round-off): its solve is CHOLMOD's solve
+// of the whole matrix within 1e-10, its float preconditioner within float rounding.
+TEST_CASE("solve: the split factorization solves like CHOLMOD on the whole matrix", "[flatten][solve]") {
+  Factored whole(180);  // 32,761 vertices, 65,522 dofs
+  const size_t n = size_t(whole.A.rows());
+  SplitCholesky split;
+  REQUIRE(split.analyze(whole.A));
+  INFO("separator " << split.separator() << " of " << n << " dofs");
+  CHECK(split.separator() > 0);
+  CHECK(split.separator() < int(0.05 * double(n)));
+  REQUIRE(split.factorize(whole.A, 0.0));
+  CHECK(split.failure().empty());
+  for (double k : {0.001, 0.37}) {
+    const std::vector<double> r = wave(n, k);
+    const Eigen::VectorXd x = whole.llt.solve(Eigen::Map<const Eigen::VectorXd>(r.data(), long(n)));
+    std::vector<double> direct(n), preconditioned(n);
+    split.solve(r.data(), direct.data());
+    split.precondition(r.data(), preconditioned.data());
+    INFO("k " << k << ": direct " << relative_error(direct, x) << ", float " << relative_error(preconditioned, x));
+    CHECK(relative_error(direct, x) < 1e-10);
+    CHECK(relative_error(preconditioned, x) < 1e-5);
+    CHECK(relative_error(preconditioned, x) > 1e-9);  // the float copies, not the double factors
+  }
+  // A new factorization of other values in the same pattern (what every Newton step does).
+  Eigen::SparseMatrix<double> B = whole.A;
+  for (int col = 0; col < B.outerSize(); ++col) B.valuePtr()[B.outerIndexPtr()[col]] *= 1.5;  // diagonals
+  SupernodalLLT llt;
+  llt.compute(B);
+  REQUIRE(split.factorize(B, 0.0));
+  const std::vector<double> r = wave(n, 0.05);
+  std::vector<double> direct(n);
+  split.solve(r.data(), direct.data());
+  CHECK(relative_error(direct, llt.solve(Eigen::Map<const Eigen::VectorXd>(r.data(), long(n)))) < 1e-10);
+}
+
+TEST_CASE("solve: the split factorization has the same bits with 1 and 2 threads", "[flatten][solve]") {
+  const Eigen::SparseMatrix<double> A = grid_system(180);
+  const std::vector<double> r = wave(size_t(A.rows()), 0.01);
+  std::vector<double> direct[2], preconditioned[2];
+  const int threads = omp_get_max_threads();
+  for (int t = 0; t < 2; ++t) {
+    omp_set_num_threads(t + 1);
+    SplitCholesky split;
+    REQUIRE(split.analyze(A));
+    REQUIRE(split.factorize(A, 1e-12));
+    direct[t].resize(r.size()), preconditioned[t].resize(r.size());
+    split.solve(r.data(), direct[t].data());
+    split.precondition(r.data(), preconditioned[t].data());
+  }
+  omp_set_num_threads(threads);
+  CHECK(std::memcmp(direct[0].data(), direct[1].data(), r.size() * sizeof(double)) == 0);
+  CHECK(std::memcmp(preconditioned[0].data(), preconditioned[1].data(), r.size() * sizeof(double)) == 0);
+}
+
+TEST_CASE("solve: the split factorization reports a matrix that is not positive definite", "[flatten][solve]") {
+  Eigen::SparseMatrix<double> A = grid_system(180);
+  SplitCholesky split;
+  REQUIRE(split.analyze(A));
+  for (long k = 0; k < A.nonZeros(); ++k) A.valuePtr()[k] = -A.valuePtr()[k];
+  CHECK_FALSE(split.factorize(A, 0.0));
+  CHECK_THAT(split.failure(), Catch::Contains("not positive definite"));
+}
+
+TEST_CASE("solve: a small system is not split", "[flatten][solve]") {
+  SplitCholesky split;
+  CHECK_FALSE(split.analyze(grid_system(6)));  // the separator is most of it
 }
