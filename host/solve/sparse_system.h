@@ -3,7 +3,8 @@
 // The sparsity pattern depends on the connectivity only, so it is built, and CHOLMOD's
 // symbolic analysis (ordering, supernodes) done, once per mesh; every iteration then
 // assembles values into the fixed pattern and refactorizes numerically (supernodal LLT on
-// OpenBLAS) or runs PCG on an earlier factor (solve_reusing). Vertex 0 is pinned (the
+// OpenBLAS; from kSplitMinDofs on, split in two halves factorized at once, split_cholesky.h)
+// or runs PCG on an earlier factor (solve_reusing, its float copy). Vertex 0 is pinned (the
 // translation null space), which leaves the step unchanged. The result is bit-identical
 // whatever the OpenMP thread count (BLAS threads: configure_blas_threads, below). How
 // assembly, factorization reuse and the pinning work, with measurements: the top of

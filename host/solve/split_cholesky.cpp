@@ -227,7 +227,8 @@ bool SplitCholesky::factorize(const Eigen::SparseMatrix<double>& lower, double s
                      : "factorization failed (CHOLMOD status " + std::to_string(status[i]) + ")";
       return false;
     }
-  // Schur complement of S: T0 T0' + T1 T1' - C - shift I, lower triangle.
+  // Schur complement of S: T0 T0' + T1 T1' - C - shift I, lower triangle (dsyrk and
+  // dpotrf leave the upper one zero, as the solves' kernels want it).
   std::fill(ls_.begin(), ls_.end(), 0.0);
   const double one = 1, zero = 0;
   dsyrk_("L", "N", &s, &s, &one, half_[0].separator.data(), &s, &zero, ls_.data(), &s);
@@ -241,8 +242,6 @@ bool SplitCholesky::factorize(const Eigen::SparseMatrix<double>& lower, double s
     failure_ = "factorization failed: matrix not positive definite (LAPACK, at the separator)";
     return false;
   }
-  for (int col = 0; col < s; ++col)
-    for (int r = 0; r < col; ++r) ls_[size_t(r) + size_t(col) * size_t(s)] = 0;  // dsyrk's untouched upper part
   for (size_t e = 0; e < ls_.size(); ++e) ls_float_[e] = float(ls_[e]);
   return true;
 }

@@ -1,7 +1,8 @@
 // A single-precision copy of a CHOLMOD supernodal LL' factor, applied as (P' L L' P)^-1 by
 // triangular solves that run independent subtrees of the supernodal elimination tree on
 // separate OpenMP threads. It is the preconditioner of SparseSystem's PCG (an earlier
-// factor preconditions the next system): there a solve is the whole cost of an iteration,
+// factor preconditions the next system) where the system is not split (split_cholesky.h
+// keeps float copies of its own): there a solve is the whole cost of an iteration,
 // and a triangular solve with one right-hand side is bound by memory bandwidth, so half
 // the bytes and two threads are what make it faster.
 //
