@@ -64,6 +64,7 @@ class SplitCholesky {
     std::vector<double> separator;    // Ti: the factor's S block, s x s column-major
     std::vector<float> x_float;       // the factor's values, float
     std::vector<double> y, w;         // work: local vector, one supernode's rows
+    double flops = 0, entries = 0;    // CHOLMOD's analysis of M
   };
   Half half_[2];
   int n_ = 0;
@@ -76,6 +77,7 @@ class SplitCholesky {
   double flops_ = 0, entries_ = 0;
   std::string failure_;
 
+  bool analyze_half(int i, const Eigen::SparseMatrix<double>& lower, const std::vector<int>& part);
   template <class T>
   void apply(const double* b, double* x, const T* factor0, const T* factor1, const T* ls);
   template <class T>
