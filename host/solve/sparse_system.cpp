@@ -85,29 +85,64 @@ SerialCholmod::~SerialCholmod() { omp_set_max_active_levels(levels_); }
 SparseSystem::SparseSystem(size_t nv, const std::vector<uint32_t>& tris) : n_(2 * nv) {
   configure_blas_threads();
   const size_t nt = tris.size() / 3;
-  // Pattern: every (vertex, vertex) pair of every triangle, 2x2 blocks, lower triangle.
-  std::vector<Eigen::Triplet<double>> triplets;
-  triplets.reserve(nt * 21);
-  for (size_t t = 0; t < nt; ++t)
-    for (int a = 0; a < 6; ++a)
-      for (int b = 0; b <= a; ++b) {
-        const long ga = 2 * long(tris[3 * t + size_t(a / 2)]) + a % 2, gb = 2 * long(tris[3 * t + size_t(b / 2)]) + b % 2;
-        triplets.emplace_back(std::max(ga, gb), std::min(ga, gb), 1.0);
-      }
-  for (size_t i = 0; i < n_; ++i) triplets.emplace_back(long(i), long(i), 1.0);  // whole diagonal
+  // Pattern: every (vertex, vertex) pair of every triangle, 2x2 blocks, lower triangle, and
+  // the whole diagonal. Built per vertex column - the vertex itself, then the vertices after
+  // it that share a triangle with it, sorted - and expanded to dofs, rather than by sorting
+  // 21 triplets a triangle (camelhead-s2: 1.2 s of the set-up).
+  std::vector<uint32_t> adj_start(nv + 1, 0), adj;
+  {
+    std::vector<uint32_t> start(nv + 1, 0);
+    for (size_t v = 0; v < nv; ++v) start[v + 1] = 1;
+    for (size_t t = 0; t < nt; ++t)
+      for (int a = 0; a < 3; ++a)
+        for (int b = 0; b < 3; ++b)
+          if (tris[3 * t + size_t(a)] > tris[3 * t + size_t(b)]) ++start[tris[3 * t + size_t(b)] + 1];
+    for (size_t v = 0; v < nv; ++v) start[v + 1] += start[v];
+    std::vector<uint32_t> all(start[nv]), fill(start.begin(), start.end() - 1);
+    for (size_t v = 0; v < nv; ++v) all[fill[v]++] = uint32_t(v);
+    for (size_t t = 0; t < nt; ++t)
+      for (int a = 0; a < 3; ++a)
+        for (int b = 0; b < 3; ++b)
+          if (tris[3 * t + size_t(a)] > tris[3 * t + size_t(b)])
+            all[fill[tris[3 * t + size_t(b)]]++] = tris[3 * t + size_t(a)];
+    adj.reserve(all.size());
+    for (size_t v = 0; v < nv; ++v) {
+      std::sort(all.begin() + start[v] + 1, all.begin() + start[v + 1]);
+      adj.push_back(uint32_t(v));
+      for (uint32_t i = start[v] + 1; i < start[v + 1]; ++i)
+        if (all[i] != adj.back()) adj.push_back(all[i]);
+      adj_start[v + 1] = uint32_t(adj.size());
+    }
+  }
+  // Dofs: column 2c holds rows 2c, 2c+1, then 2r, 2r+1 for each later neighbour r; column
+  // 2c+1 the same without row 2c.
   matrix_.resize(long(n_), long(n_));
-  matrix_.setFromTriplets(triplets.begin(), triplets.end());
-  matrix_.makeCompressed();
-  triplets.clear();
-  triplets.shrink_to_fit();
+  matrix_.resizeNonZeros(long(4 * (adj.size() - nv) + 3 * nv));
+  {
+    int* outer = matrix_.outerIndexPtr();
+    int* inner = matrix_.innerIndexPtr();
+    int k = 0;
+    for (size_t c = 0; c < nv; ++c)
+      for (int q = 0; q < 2; ++q) {
+        outer[2 * c + size_t(q)] = k;
+        if (q == 0) inner[k++] = int(2 * c);
+        inner[k++] = int(2 * c + 1);
+        for (uint32_t i = adj_start[c] + 1; i < adj_start[c + 1]; ++i) inner[k++] = int(2 * adj[i]), inner[k++] = int(2 * adj[i] + 1);
+      }
+    outer[n_] = k;
+    std::fill(matrix_.valuePtr(), matrix_.valuePtr() + k, 1.0);
+  }
 
   // Gather lists: for each nonzero, which hess21 entries add into it (triangle order).
   const auto* outer = matrix_.outerIndexPtr();
   const auto* inner = matrix_.innerIndexPtr();
-  auto position = [&](long row, long col) {  // row >= col
-    const auto* begin = inner + outer[col];
-    const auto* end = inner + outer[col + 1];
-    return uint32_t(std::lower_bound(begin, end, int(row)) - inner);
+  auto position = [&](long row, long col) {  // row >= col: the entry's index, from the vertex lists
+    const uint32_t rv = uint32_t(row / 2), cv = uint32_t(col / 2);
+    const int p = int(row % 2), q = int(col % 2);
+    const uint32_t* first = adj.data() + adj_start[cv];
+    const uint32_t* last = adj.data() + adj_start[cv + 1];
+    const uint32_t k = rv == cv ? 0 : uint32_t(std::lower_bound(first + 1, last, rv) - first);
+    return uint32_t(outer[col]) + (k == 0 ? uint32_t(p - q) : 2 * k + uint32_t(p) - uint32_t(q));
   };
   const size_t nnz = size_t(matrix_.nonZeros());
   std::vector<uint32_t> target(nt * 21);

@@ -259,40 +259,31 @@ bool SplitCholesky::factorize(const Eigen::SparseMatrix<double>& lower, double s
   return true;
 }
 
+// One triangular sweep through a half's columns: with L (forward, supernodes in order,
+// the separator's rows collecting updates in h.y) or with L' (backward, in reverse order,
+// the separator's solution read from h.y).
 template <class T>
-void SplitCholesky::forward(Half& h, const T* factor) {
+void SplitCholesky::sweep(Half& h, const T* factor, bool forward) {
   const cholmod_factor& L = h.llt.factor();
   const int* super = static_cast<const int*>(L.super);
   const int* pi = static_cast<const int*>(L.pi);
   const int* px = static_cast<const int*>(L.px);
   double* y = h.y.data();
   double* w = h.w.data();
-  for (int k = 0; k < h.supernodes; ++k) {
+  for (int step = 0; step < h.supernodes; ++step) {
+    const int k = forward ? step : h.supernodes - 1 - step;
     const int c0 = super[k], m = pi[k + 1] - pi[k];
     const int cols = std::min(super[k + 1], h.interior) - c0;
     const int* rows = static_cast<const int*>(L.s) + pi[k];
-    for (int i = 0; i < cols; ++i) w[i] = y[c0 + i];
-    for (int i = cols; i < m; ++i) w[i] = 0;
-    supernode_forward(factor + px[k], m, cols, w);
-    for (int i = 0; i < cols; ++i) y[c0 + i] = w[i];
-    for (int i = cols; i < m; ++i) y[rows[i]] += w[i];
-  }
-}
-
-template <class T>
-void SplitCholesky::backward(Half& h, const T* factor) {
-  const cholmod_factor& L = h.llt.factor();
-  const int* super = static_cast<const int*>(L.super);
-  const int* pi = static_cast<const int*>(L.pi);
-  const int* px = static_cast<const int*>(L.px);
-  double* y = h.y.data();
-  double* w = h.w.data();
-  for (int k = h.supernodes - 1; k >= 0; --k) {
-    const int c0 = super[k], m = pi[k + 1] - pi[k];
-    const int cols = std::min(super[k + 1], h.interior) - c0;
-    const int* rows = static_cast<const int*>(L.s) + pi[k];
-    for (int i = 0; i < m; ++i) w[i] = y[rows[i]];
-    supernode_backward(factor + px[k], m, cols, w);
+    if (forward) {
+      for (int i = 0; i < cols; ++i) w[i] = y[c0 + i];
+      for (int i = cols; i < m; ++i) w[i] = 0;
+      supernode_forward(factor + px[k], m, cols, w);
+      for (int i = cols; i < m; ++i) y[rows[i]] += w[i];
+    } else {
+      for (int i = 0; i < m; ++i) w[i] = y[rows[i]];
+      supernode_backward(factor + px[k], m, cols, w);
+    }
     for (int i = 0; i < cols; ++i) y[c0 + i] = w[i];
   }
 }
@@ -306,7 +297,7 @@ void SplitCholesky::apply(const double* b, double* x, const T* factor0, const T*
     Half& h = half_[size_t(i)];
     for (int j = 0; j < h.interior; ++j) h.y[size_t(j)] = b[h.dofs[size_t(j)]];
     std::fill(h.y.begin() + h.interior, h.y.end(), 0.0);
-    forward(h, factor[i]);
+    sweep(h, factor[i], true);
   }
   for (int q = 0; q < s; ++q)
     sep_rhs_[size_t(q)] = b[sep_[size_t(q)]] + half_[0].y[size_t(half_[0].interior + q)] +
@@ -317,7 +308,7 @@ void SplitCholesky::apply(const double* b, double* x, const T* factor0, const T*
   for (int i = 0; i < 2; ++i) {
     Half& h = half_[size_t(i)];
     std::copy(sep_rhs_.begin(), sep_rhs_.end(), h.y.begin() + h.interior);
-    backward(h, factor[i]);
+    sweep(h, factor[i], false);
     for (int j = 0; j < h.interior; ++j) x[h.dofs[size_t(j)]] = h.y[size_t(j)];
   }
   for (int q = 0; q < s; ++q) x[sep_[size_t(q)]] = sep_rhs_[size_t(q)];

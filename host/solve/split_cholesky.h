@@ -81,9 +81,7 @@ class SplitCholesky {
   template <class T>
   void apply(const double* b, double* x, const T* factor0, const T* factor1, const T* ls);
   template <class T>
-  void forward(Half& h, const T* factor);
-  template <class T>
-  void backward(Half& h, const T* factor);
+  void sweep(Half& h, const T* factor, bool forward);
 };
 
 }  // namespace uvpress::solve
