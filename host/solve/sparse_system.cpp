@@ -42,18 +42,21 @@
 namespace uvpress::solve {
 
 namespace {
-// PCG iterations one solve may spend on an old factor before refactorizing. A PCG iteration
-// is two triangular solves (4 lnz flops) and a product with H (4 nnz flops); a numeric
-// factorization is `fl` flops. The solves are memory-bound BLAS-2 and run about
-// kSolveSlowdown times fewer flops per second than the BLAS-3 factorization (measured on
-// camelhead subdivided 0-2 times, OpenBLAS on one thread: a factorization costs 10-13 PCG
-// iterations there). A failed attempt may waste at most kBudgetShare of a factorization.
 // Systems from this many dofs on are factorized split in two (split_cholesky.h). Measured
 // on camelhead (22.7K dofs): 0.050 -> 0.042 s a factorization, and, the budget below
 // counting the separator's dense work, 11 factorizations instead of 15 (t_c 1.0 -> 0.7 s,
 // E_c within 2e-9); on camelhead-s1 and -s2 a factorization is 2x faster.
 constexpr size_t kSplitMinDofs = 20000;
 
+// PCG iterations one solve may spend on an old factor before refactorizing. A PCG iteration
+// is two triangular solves (4 lnz flops) and a product with H (4 nnz flops); a numeric
+// factorization is `fl` flops. The solves are memory-bound BLAS-2 and run about
+// kSolveSlowdown times fewer flops per second than the BLAS-3 factorization (measured on
+// camelhead subdivided 0-2 times, OpenBLAS on one thread: a factorization costs 10-13 PCG
+// iterations there). A failed attempt may waste at most kBudgetShare of a factorization.
+// Since the split and its float preconditioner (split_cholesky.h) a factorization costs
+// about 25 PCG iterations on camelhead-s2; budgets of 15 and 30 saved no factorization
+// there (the stale factors fail in the first steps either way), so the budget stays.
 int reuse_budget(double fl, double lnz, double nnz) {
   constexpr double kSolveSlowdown = 5, kBudgetShare = 0.5;
   return int(std::min(100.0, kBudgetShare * fl / (kSolveSlowdown * (4 * lnz + 4 * nnz))));
@@ -187,7 +190,6 @@ SparseSystem::SparseSystem(size_t nv, const std::vector<uint32_t>& tris) : n_(2 
     solver_.analyzePattern(matrix_);
   }
   pcg_budget_ = reuse_budget(c.fl, c.lnz, double(matrix_.nonZeros()));
-  preconditioner_.analyze(solver_.factor());
 }
 
 void choose_fill_ordering(cholmod_common& c) {
@@ -256,10 +258,7 @@ bool SparseSystem::factorize() {
     solver_.factorize(matrix_);
   }
   factored_ = solver_.info() == Eigen::Success;
-  if (factored_) {
-    if (pcg_budget_ > 0) preconditioner_.assign(solver_.factor());
-    return true;
-  }
+  if (factored_) return true;
   const int status = solver_.cholmod().status;
   failure_ = status == CHOLMOD_NOT_POSDEF ? "factorization failed: matrix not positive definite (CHOLMOD)"
              : status == CHOLMOD_OUT_OF_MEMORY ? "factorization failed: out of memory (CHOLMOD)"
@@ -328,9 +327,15 @@ void SparseSystem::multiply(const std::vector<double>& x, std::vector<double>& y
 }
 
 void SparseSystem::precondition(const std::vector<double>& r, std::vector<double>& z) {
-  z.resize(n_);
-  if (split_active_) split_.precondition(r.data(), z.data());
-  else preconditioner_.solve(r.data(), z.data());
+  if (split_active_) {
+    z.resize(n_);
+    split_.precondition(r.data(), z.data());
+    return;
+  }
+  const Eigen::Map<const Eigen::VectorXd> rhs(r.data(), long(n_));
+  const SerialCholmod serial;
+  const Eigen::VectorXd x = solver_.solve(rhs);
+  z.assign(x.data(), x.data() + n_);
 }
 
 bool SparseSystem::pcg(const std::vector<double>& grad, std::vector<double>& d, double tolerance) {

@@ -4,7 +4,7 @@
 // symbolic analysis (ordering, supernodes) done, once per mesh; every iteration then
 // assembles values into the fixed pattern and refactorizes numerically (supernodal LLT on
 // OpenBLAS; from kSplitMinDofs on, split in two halves factorized at once, split_cholesky.h)
-// or runs PCG on an earlier factor (solve_reusing, its float copy). Vertex 0 is pinned (the
+// or runs PCG on an earlier factor (solve_reusing). Vertex 0 is pinned (the
 // translation null space), which leaves the step unchanged. The result is bit-identical
 // whatever the OpenMP thread count (BLAS threads: configure_blas_threads, below). How
 // assembly, factorization reuse and the pinning work, with measurements: the top of
@@ -13,7 +13,6 @@
 
 #include "solve/pcg.h"
 #include "solve/split_cholesky.h"
-#include "solve/supernodal_solve.h"
 
 #include <Eigen/CholmodSupport>
 #include <Eigen/Sparse>
@@ -72,8 +71,7 @@ class SparseSystem {
   std::vector<uint32_t> vertex_start_, vertex_corner_;  // per vertex: 3 t + corner
   std::vector<uint32_t> pinned_entries_;  // nonzeros in the rows/columns of dofs 0 and 1
   SupernodalLLT solver_;
-  FloatSupernodalFactor preconditioner_;  // the last factor in float, for PCG
-  SplitCholesky split_;  // used instead of the two above on large systems (split_active_)
+  SplitCholesky split_;  // used instead of solver_ on large systems (split_active_)
   bool split_active_ = false;
   double diagonal_mean_ = 1;
   std::string failure_;
@@ -88,7 +86,7 @@ class SparseSystem {
   double shift() const { return 1e-10 * diagonal_mean_; }
   // y = (H + shift) x for the lower triangle stored in matrix_: sequential, fixed order.
   void multiply(const std::vector<double>& x, std::vector<double>& y) const;
-  // z = the last factor's inverse (its float copy) applied to r.
+  // z = the last factor's inverse applied to r (split: its float copy).
   void precondition(const std::vector<double>& r, std::vector<double>& z);
   // PCG from d = 0; true when it converged within the budget.
   bool pcg(const std::vector<double>& grad, std::vector<double>& d, double tolerance);

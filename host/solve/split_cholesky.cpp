@@ -18,7 +18,6 @@
 #include "solve/split_cholesky.h"
 
 #include "solve/sparse_system.h"
-#include "solve/supernode_kernels.h"
 
 #include <algorithm>
 #include <cstring>
@@ -37,6 +36,43 @@ namespace {
 constexpr double kMaxSeparatorShare = 0.05;
 // ... and the halves even: the slower one is the factorization's time.
 constexpr double kMinHalfShare = 0.3;
+
+// The dense work of one supernode in a triangular solve with L (forward) or L'
+// (backward), on its rows gathered into w. The supernode is m rows by at least k columns,
+// column-major with leading dimension m (CHOLMOD's layout), its first rows its own
+// columns; only the first k columns are solved (a half stops at the separator). T is float
+// for the preconditioner's copies, double for direct solves; w is double either way.
+// In: w[0, k) the right-hand side, w[k, m) zero. Out: w[0, k) solved, w[k, m) the updates
+// to add to those rows (minus L(k:m, 0:k) times the solution).
+template <class T>
+void supernode_forward(const T* L, int m, int k, double* w) {
+  for (int j = 0; j < k; ++j) {
+    const T* col = L + long(j) * m;
+    const double xj = w[j] / double(col[j]);
+    w[j] = xj;
+    for (int i = j + 1; i < m; ++i) w[i] -= double(col[i]) * xj;
+  }
+}
+
+// In: w[0, k) the right-hand side, w[k, m) the solution at those rows. Out: w[0, k) solved.
+template <class T>
+void supernode_backward(const T* L, int m, int k, double* w) {
+  for (int j = k - 1; j >= 0; --j) {
+    const T* col = L + long(j) * m;
+    // Four partial sums in a fixed order: vectorizable, and the same bits everywhere.
+    double a0 = 0, a1 = 0, a2 = 0, a3 = 0;
+    int i = j + 1;
+    for (; i + 4 <= m; i += 4) {
+      a0 += double(col[i]) * w[i];
+      a1 += double(col[i + 1]) * w[i + 1];
+      a2 += double(col[i + 2]) * w[i + 2];
+      a3 += double(col[i + 3]) * w[i + 3];
+    }
+    for (; i < m; ++i) a0 += double(col[i]) * w[i];
+    w[j] = (w[j] - ((a0 + a1) + (a2 + a3))) / double(col[j]);
+  }
+}
+
 }  // namespace
 
 bool SplitCholesky::analyze(const Eigen::SparseMatrix<double>& lower) {

@@ -1,11 +1,10 @@
-// host/solve: the float factor's preconditioner solve (supernodal_solve.h) and the
-// two-thread split factorization (split_cholesky.h) against CHOLMOD's double solve of the
-// whole matrix, the same bits whatever the thread count, and failures reported.
+// host/solve: the two-thread split factorization (split_cholesky.h) and its float
+// preconditioner against CHOLMOD's double solve of the whole matrix, the same bits
+// whatever the thread count, and failures reported.
 #include <catch2/catch.hpp>
 
 #include "solve/sparse_system.h"
 #include "solve/split_cholesky.h"
-#include "solve/supernodal_solve.h"
 
 #include <cmath>
 #include <cstring>
@@ -66,15 +65,10 @@ double relative_error(const std::vector<double>& z, const Eigen::VectorXd& x) {
 struct Factored {
   Eigen::SparseMatrix<double> A;
   SupernodalLLT llt;
-  FloatSupernodalFactor f;
   explicit Factored(int n) : A(grid_system(n)) {
     const SerialCholmod serial;
-    llt.cholmod().nmethods = 1;
-    llt.cholmod().method[0].ordering = CHOLMOD_NESDIS;
     llt.compute(A);
     REQUIRE(llt.info() == Eigen::Success);
-    f.analyze(llt.factor());
-    f.assign(llt.factor());
   }
 };
 
@@ -85,56 +79,6 @@ std::vector<double> wave(size_t n, double k) {
 }
 
 }  // namespace
-
-TEST_CASE("solve: the float factor's solve is CHOLMOD's double solve within float rounding, split into subtrees",
-          "[flatten][solve]") {
-  Factored s(160);  // 25,921 vertices, 51,842 dofs
-  const size_t n = size_t(s.A.rows());
-  INFO("groups " << s.f.groups() << ", top share " << s.f.top_share());
-  CHECK(s.f.groups() == 4);
-  CHECK(s.f.top_share() > 0);
-  CHECK(s.f.top_share() < 0.25);
-  for (double k : {0.001, 0.37}) {  // smooth and oscillating right-hand sides
-    const std::vector<double> r = wave(n, k);
-    std::vector<double> z(n);
-    s.f.solve(r.data(), z.data());
-    const Eigen::VectorXd x = s.llt.solve(Eigen::Map<const Eigen::VectorXd>(r.data(), long(n)));
-    double err = 0, norm = 0, rz = 0;
-    for (size_t i = 0; i < n; ++i) err += (z[i] - x[long(i)]) * (z[i] - x[long(i)]), norm += x[long(i)] * x[long(i)];
-    for (size_t i = 0; i < n; ++i) rz += r[i] * z[i];
-    INFO("k " << k << ": relative error " << std::sqrt(err / norm));
-    CHECK(std::sqrt(err / norm) < 1e-5);
-    CHECK(std::sqrt(err / norm) > 0);  // it is the float factor, not CHOLMOD's
-    CHECK(rz > 0);
-  }
-}
-
-TEST_CASE("solve: the float factor's solve has the same bits with 1 and 2 threads", "[flatten][solve]") {
-  Factored s(160);
-  REQUIRE(s.f.groups() > 1);
-  const std::vector<double> r = wave(size_t(s.A.rows()), 0.01);
-  std::vector<double> one(r.size()), two(r.size());
-  const int threads = omp_get_max_threads();
-  omp_set_num_threads(1);
-  s.f.solve(r.data(), one.data());
-  omp_set_num_threads(2);
-  s.f.solve(r.data(), two.data());
-  omp_set_num_threads(threads);
-  CHECK(std::memcmp(one.data(), two.data(), one.size() * sizeof(double)) == 0);
-}
-
-TEST_CASE("solve: a factor too small to split is solved on one thread, as accurately", "[flatten][solve]") {
-  Factored s(12);
-  CHECK(s.f.groups() == 0);
-  CHECK(s.f.top_share() == 1.0);
-  const std::vector<double> r = wave(size_t(s.A.rows()), 0.2);
-  std::vector<double> z(r.size());
-  s.f.solve(r.data(), z.data());
-  const Eigen::VectorXd x = s.llt.solve(Eigen::Map<const Eigen::VectorXd>(r.data(), long(r.size())));
-  double err = 0, norm = 0;
-  for (size_t i = 0; i < r.size(); ++i) err += (z[i] - x[long(i)]) * (z[i] - x[long(i)]), norm += x[long(i)] * x[long(i)];
-  CHECK(std::sqrt(err / norm) < 1e-5);
-}
 
 // The split factorization is exact (double, up to round-off): its solve is CHOLMOD's solve
 // of the whole matrix within 1e-10, its float preconditioner within float rounding.
