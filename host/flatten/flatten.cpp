@@ -144,15 +144,16 @@ Result flatten(const Mesh& mesh, const Options& o) {
   const Problem p = make_problem(positions, topo.triangles);
   const size_t nt = p.triangle_count();
 
-  std::vector<double> uv = tutte_embedding(p.vertex_count, p.triangles, topo.boundary, 1.0);
+  Solver solver(p);  // first: the Tutte solve takes its elimination order
+  solver.break_factorization(o.test_break_factorization);
+  if (o.test_pcg_budget >= 0) solver.set_pcg_budget(o.test_pcg_budget);
+  const std::vector<uint32_t> order = solver.vertex_order();
+  std::vector<double> uv = tutte_embedding(p.vertex_count, p.triangles, topo.boundary, 1.0, &order);
   if (size_t bad = count_flips(p.triangles, uv))
     throw FlattenError("the Tutte embedding degenerates " + std::to_string(bad) +
                        " triangles in floating point (the mesh is too irregular)");
   const std::vector<double> area_w = area_weights(p);
   const std::vector<double> uniform_w(nt, 1.0 / double(nt));
-  Solver solver(p);
-  solver.break_factorization(o.test_break_factorization);
-  if (o.test_pcg_budget >= 0) solver.set_pcg_budget(o.test_pcg_budget);
 
   Result r;
   r.degenerate_references = p.degenerate;

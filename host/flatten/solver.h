@@ -47,6 +47,8 @@ class Solver {
                  double gradient_tolerance);
 
   size_t nonzeros() const { return system_.nonzeros(); }
+  // See solve::SparseSystem::vertex_order.
+  std::vector<uint32_t> vertex_order() const { return system_.vertex_order(); }
   // Test hook: see solve::SparseSystem::set_pcg_budget.
   void set_pcg_budget(int iterations) { system_.set_pcg_budget(iterations); }
   // Test hook: see solve::SparseSystem::break_factorization.

@@ -12,7 +12,7 @@
 namespace uvpress::flatten {
 
 std::vector<double> tutte_embedding(size_t nv, const std::vector<uint32_t>& tris, const std::vector<uint32_t>& boundary,
-                                    double area) {
+                                    double area, const std::vector<uint32_t>* order) {
   constexpr double kPi = 3.14159265358979323846;
   const double radius = std::sqrt(area / kPi);
   std::vector<double> uv(2 * nv, 0.0);
@@ -25,8 +25,17 @@ std::vector<double> tutte_embedding(size_t nv, const std::vector<uint32_t>& tris
     on_boundary[boundary[k]] = 1;
   }
   int ni = 0;
-  for (size_t v = 0; v < nv; ++v)
-    if (!on_boundary[v]) interior_index[v] = ni++;
+  if (order && order->size() == nv) {  // interior vertices numbered in the given order
+    for (uint32_t v : *order)
+      if (!on_boundary[v] && interior_index[v] < 0) interior_index[v] = ni++;
+  }
+  if (ni != int(nv) - int(boundary.size()) || !order) {  // no usable order: natural numbering
+    ni = 0;
+    std::fill(interior_index.begin(), interior_index.end(), -1);
+    for (size_t v = 0; v < nv; ++v)
+      if (!on_boundary[v]) interior_index[v] = ni++;
+    order = nullptr;
+  }
   if (ni == 0) return uv;
 
   // Uniform-weight Laplacian over undirected edges (each interior edge is seen from two
@@ -61,6 +70,10 @@ std::vector<double> tutte_embedding(size_t nv, const std::vector<uint32_t>& tris
   L.setFromTriplets(triplets.begin(), triplets.end());
   solve::configure_blas_threads();
   Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Lower> solver;
+  if (order) {  // already numbered in elimination order
+    solver.cholmod().nmethods = 1;
+    solver.cholmod().method[0].ordering = CHOLMOD_NATURAL;
+  }
   const solve::SerialCholmod serial;
   solver.compute(L);
   if (solver.info() != Eigen::Success) throw FlattenError("Tutte embedding: the Laplacian could not be factorized");

@@ -200,6 +200,21 @@ void choose_fill_ordering(cholmod_common& c) {
   c.postorder = 1;
 }
 
+std::vector<uint32_t> SparseSystem::vertex_order() const {
+  std::vector<int> dofs;
+  if (split_active_) {
+    dofs = split_.elimination_order();
+  } else {
+    const int* perm = static_cast<const int*>(solver_.factor().Perm);
+    dofs.assign(perm, perm + n_);
+  }
+  std::vector<uint32_t> order;
+  std::vector<uint8_t> seen(n_ / 2, 0);
+  for (int d : dofs)
+    if (!seen[size_t(d / 2)]) seen[size_t(d / 2)] = 1, order.push_back(uint32_t(d / 2));
+  return order;
+}
+
 void SparseSystem::assemble(const std::vector<double>& hess21) {
   double* values = matrix_.valuePtr();
   const long nnz = long(matrix_.nonZeros());

@@ -58,6 +58,10 @@ class SparseSystem {
   bool solve_reusing(const std::vector<double>& grad, std::vector<double>& d, double tolerance, SolveStats& stats);
 
   size_t nonzeros() const { return size_t(matrix_.nonZeros()); }
+  // The vertices in the order of the analysis's fill-reducing ordering (each where its
+  // first dof is eliminated): a good elimination order for other systems on the same mesh
+  // (flatten's Tutte embedding), without ordering again.
+  std::vector<uint32_t> vertex_order() const;
   int factorizations() const { return factorizations_; }
   long pcg_iterations() const { return pcg_iterations_; }
   int pcg_budget() const { return pcg_budget_; }

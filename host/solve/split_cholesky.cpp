@@ -350,6 +350,13 @@ void SplitCholesky::apply(const double* b, double* x, const T* factor0, const T*
   for (int q = 0; q < s; ++q) x[sep_[size_t(q)]] = sep_rhs_[size_t(q)];
 }
 
+std::vector<int> SplitCholesky::elimination_order() const {
+  std::vector<int> order = half_[0].dofs;
+  order.insert(order.end(), half_[1].dofs.begin(), half_[1].dofs.end());
+  order.insert(order.end(), sep_.begin(), sep_.end());
+  return order;
+}
+
 void SplitCholesky::solve(const double* b, double* x) {
   apply(b, x, static_cast<const double*>(half_[0].llt.factor().x), static_cast<const double*>(half_[1].llt.factor().x),
         ls_.data());

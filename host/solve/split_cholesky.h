@@ -59,6 +59,8 @@ class SplitCholesky {
   double flops() const { return flops_; }
   double entries() const { return entries_; }
   int separator() const { return int(sep_.size()); }
+  // The dofs in elimination order: half 0's, half 1's, then the separator's.
+  std::vector<int> elimination_order() const;
 
  private:
   struct Half {
