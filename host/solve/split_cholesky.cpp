@@ -5,7 +5,7 @@
 // block Ai is ordered like a whole system (choose_fill_ordering); Mi is then built in that
 // order with S last and analysed in its natural order, not postordered, so that CHOLMOD's
 // columns are exactly [half i, S]. A supernode may straddle the boundary: the solves stop
-// at the first separator column (supernode_kernels.h's k).
+// at the first separator column (the kernels' k, below).
 //
 // factorize: both halves gather their values from the whole matrix and factorize, one
 // thread each; each writes its separator block Ti (dense, s x s) and a float copy of its
@@ -20,7 +20,7 @@
 #include "solve/sparse_system.h"
 
 #include <algorithm>
-#include <cstring>
+#include <string>
 
 extern "C" {
 void dsyrk_(const char* uplo, const char* trans, const int* n, const int* k, const double* alpha, const double* a,
@@ -42,7 +42,8 @@ constexpr double kMinHalfShare = 0.3;
 // column-major with leading dimension m (CHOLMOD's layout), its first rows its own
 // columns; only the first k columns are solved (a half stops at the separator). T is float
 // for the preconditioner's copies, double for direct solves; w is double either way.
-// In: w[0, k) the right-hand side, w[k, m) zero. Out: w[0, k) solved, w[k, m) the updates
+//
+// Forward. In: w[0, k) the right-hand side, w[k, m) zero. Out: w[0, k) solved, w[k, m) the updates
 // to add to those rows (minus L(k:m, 0:k) times the solution).
 template <class T>
 void supernode_forward(const T* L, int m, int k, double* w) {
@@ -54,7 +55,8 @@ void supernode_forward(const T* L, int m, int k, double* w) {
   }
 }
 
-// In: w[0, k) the right-hand side, w[k, m) the solution at those rows. Out: w[0, k) solved.
+// Backward. In: w[0, k) the right-hand side, w[k, m) the solution at those rows. Out:
+// w[0, k) solved.
 template <class T>
 void supernode_backward(const T* L, int m, int k, double* w) {
   for (int j = k - 1; j >= 0; --j) {
@@ -126,8 +128,9 @@ bool SplitCholesky::analyze(const Eigen::SparseMatrix<double>& lower) {
   entries_ = double(s) * s;
   bool ok[2] = {false, false};
   // One after the other: run on two threads, the halves' orderings (METIS inside
-  // CHOLMOD's nested dissection) came out different from run to run (test #178 failed
-  // 1 in 3), so the analysis stays serial; only the numeric work runs in parallel.
+  // CHOLMOD's nested dissection) came out different from run to run (flatten's 1-vs-2
+  // threads test failed 1 run in 3), so the analysis stays serial; only the numeric work
+  // runs in parallel.
   for (int i = 0; i < 2; ++i) {
     const SerialCholmod serial;
     ok[i] = analyze_half(i, lower, part);
