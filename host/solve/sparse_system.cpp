@@ -274,10 +274,7 @@ bool SparseSystem::factorize() {
   }
   factored_ = solver_.info() == Eigen::Success;
   if (factored_) return true;
-  const int status = solver_.cholmod().status;
-  failure_ = status == CHOLMOD_NOT_POSDEF ? "factorization failed: matrix not positive definite (CHOLMOD)"
-             : status == CHOLMOD_OUT_OF_MEMORY ? "factorization failed: out of memory (CHOLMOD)"
-                                               : "factorization failed (CHOLMOD status " + std::to_string(status) + ")";
+  failure_ = cholmod_failure(solver_.cholmod().status);
   return false;
 }
 

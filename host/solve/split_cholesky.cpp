@@ -8,8 +8,7 @@
 // at the first separator column (the kernels' k, below).
 //
 // factorize: both halves gather their values from the whole matrix and factorize, one
-// thread each; each writes its separator block Ti (dense, s x s) and a float copy of its
-// factor. Then S's Schur complement T0 T0' + T1 T1' - C - shift I by two dsyrk calls, and
+// thread each; each writes its separator block Ti (dense, s x s). Then S's Schur complement T0 T0' + T1 T1' - C - shift I by two dsyrk calls, and
 // dpotrf.
 //
 // solve: forward through both halves at once (each half's updates of S stay in its own
@@ -76,6 +75,12 @@ void supernode_backward(const T* L, int m, int k, double* w) {
 }
 
 }  // namespace
+
+std::string cholmod_failure(int status) {
+  return status == CHOLMOD_NOT_POSDEF      ? "factorization failed: matrix not positive definite (CHOLMOD)"
+         : status == CHOLMOD_OUT_OF_MEMORY ? "factorization failed: out of memory (CHOLMOD)"
+                                           : "factorization failed (CHOLMOD status " + std::to_string(status) + ")";
+}
 
 bool SplitCholesky::analyze(const Eigen::SparseMatrix<double>& lower) {
   n_ = int(lower.rows());
@@ -230,7 +235,7 @@ bool SplitCholesky::analyze_half(int i, const Eigen::SparseMatrix<double>& lower
     rows = std::max(rows, pi[k + 1] - pi[k]);
   }
   h.y.assign(size_t(m), 0.0);
-  h.w.assign(size_t(std::max(rows, s)), 0.0);
+  h.w.assign(size_t(rows), 0.0);
   h.separator.assign(size_t(s) * size_t(s), 0.0);
   return true;
 }
@@ -266,17 +271,12 @@ bool SplitCholesky::factorize(const Eigen::SparseMatrix<double>& lower, double s
         const double* col = x + px[k] + long(offset) * m;
         for (int r = offset; r < m; ++r) h.separator[size_t(rows[pi[k] + r] - h.interior) + size_t(q) * size_t(s)] = col[r];
       }
-      const long size = h.supernodes ? long(px[h.supernodes]) : 0;
-      h.x_float.resize(size_t(size));
-      for (long e = 0; e < size; ++e) h.x_float[size_t(e)] = float(x[e]);
     }
   }
+  floats_current_ = false;
   for (int i = 0; i < 2; ++i)
     if (status[i] != CHOLMOD_OK) {
-      failure_ = status[i] == CHOLMOD_NOT_POSDEF ? "factorization failed: matrix not positive definite (CHOLMOD)"
-                 : status[i] == CHOLMOD_OUT_OF_MEMORY
-                     ? "factorization failed: out of memory (CHOLMOD)"
-                     : "factorization failed (CHOLMOD status " + std::to_string(status[i]) + ")";
+      failure_ = cholmod_failure(status[i]);
       return false;
     }
   // Schur complement of S: T0 T0' + T1 T1' - C - shift I, lower triangle (dsyrk and
@@ -294,7 +294,6 @@ bool SplitCholesky::factorize(const Eigen::SparseMatrix<double>& lower, double s
     failure_ = "factorization failed: matrix not positive definite (LAPACK, at the separator)";
     return false;
   }
-  for (size_t e = 0; e < ls_.size(); ++e) ls_float_[e] = float(ls_[e]);
   return true;
 }
 
@@ -366,6 +365,19 @@ void SplitCholesky::solve(const double* b, double* x) {
 }
 
 void SplitCholesky::precondition(const double* r, double* z) {
+  if (!floats_current_) {  // the first preconditioning since the factorization: copy it once
+#pragma omp parallel for schedule(static, 1)
+    for (int i = 0; i < 2; ++i) {
+      Half& h = half_[size_t(i)];
+      const cholmod_factor& L = h.llt.factor();
+      const double* x = static_cast<const double*>(L.x);
+      const long size = h.supernodes ? long(static_cast<const int*>(L.px)[h.supernodes]) : 0;
+      h.x_float.resize(size_t(size));
+      for (long e = 0; e < size; ++e) h.x_float[size_t(e)] = float(x[e]);
+    }
+    for (size_t e = 0; e < ls_.size(); ++e) ls_float_[e] = float(ls_[e]);
+    floats_current_ = true;
+  }
   apply(r, z, half_[0].x_float.data(), half_[1].x_float.data(), ls_float_.data());
 }
 

@@ -34,6 +34,9 @@ struct SupernodalLLT : Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, 
   const cholmod_factor& factor() const { return *m_cholmodFactor; }
 };
 
+// A failed CHOLMOD factorization's reason in words, from cholmod_common::status.
+std::string cholmod_failure(int status);
+
 class SplitCholesky {
  public:
   // Finds the separator (METIS through cholmod_bisect) and analyses both halves. `lower`:
@@ -72,7 +75,7 @@ class SplitCholesky {
     std::vector<int> column_super;    // per local column: its supernode
     int supernodes = 0;               // supernodes with a column < interior
     std::vector<double> separator;    // Ti: the factor's S block, s x s column-major
-    std::vector<float> x_float;       // the factor's values, float
+    std::vector<float> x_float;       // the factor's values, float (made by precondition())
     std::vector<double> y, w;         // work: local vector, one supernode's rows
     double flops = 0, entries = 0;    // CHOLMOD's analysis of M
   };
@@ -83,6 +86,7 @@ class SplitCholesky {
   std::vector<int> sep_entry_row_, sep_entry_col_;  // their separator indices
   std::vector<double> ls_;               // Ls, s x s column-major (upper part zero)
   std::vector<float> ls_float_;
+  bool floats_current_ = false;          // the float copies are of the last factorization
   std::vector<double> sep_rhs_, sep_w_;
   double flops_ = 0, entries_ = 0;
   std::string failure_;
