@@ -29,71 +29,139 @@ float plane(const float c[3], float fx, float fy) {
   return v;
 }
 
+// i wrapped into [0, n): most coordinates already are (one compare instead of a division).
 int32_t wrap(int32_t i, int32_t n) {
+  if (uint32_t(i) < uint32_t(n)) return i;
   const int32_t r = i % n;
   return r < 0 ? r + n : r;
 }
 
-// Adds weight x the bilinear sample of mip level `level` at level-0 texel coordinates
-// (s, t) to out (first: out = instead of +=).
-void sample_level(const MeshRenderDesc& d, uint32_t level, float s, float t, float weight, float* out, bool first) {
-  const uint32_t C = d.channels;
-  const int32_t TW = int32_t(std::max(1u, d.texture_width >> level)), TH = int32_t(std::max(1u, d.texture_height >> level));
-  const float* tex = d.texture + mip_chain_texels(d.texture_width, d.texture_height, level) * C;
-  if (level > 0) {
-    // Texel centres of level l: s_l + 0.5 = (s + 0.5) W_l / W.
-    s = (s + 0.5f) * (float(TW) / float(d.texture_width)) - 0.5f;
-    t = (t + 0.5f) * (float(TH) / float(d.texture_height)) - 0.5f;
+// A texture as the sampler reads it: each mip level's texels, size, and the scale from
+// level-0 texel centres to its own (level l: s_l + 0.5 = (s + 0.5) W_l / W), worked out
+// once per texture rather than at every sample.
+struct Sampler {
+  struct Level {
+    const float* texels;
+    int32_t width, height;
+    float scale_s, scale_t;
+  };
+  Level levels[32];
+  uint32_t level_count = 1, channels = 1;
+  bool repeat = false;
+
+  explicit Sampler(const MeshRenderDesc& d) : level_count(d.mip_levels), channels(d.channels), repeat(d.repeat) {
+    for (uint32_t l = 0; l < level_count; ++l) {
+      Level& L = levels[l];
+      L.width = int32_t(std::max(1u, d.texture_width >> l)), L.height = int32_t(std::max(1u, d.texture_height >> l));
+      L.texels = d.texture + mip_chain_texels(d.texture_width, d.texture_height, l) * d.channels;
+      L.scale_s = float(L.width) / float(d.texture_width);
+      L.scale_t = float(L.height) / float(d.texture_height);
+    }
   }
-  int32_t i0, j0, i1, j1;
-  float fs, ft;
-  if (d.repeat) {
-    s = std::min(std::max(s, -16777216.0f), 16777216.0f);
-    t = std::min(std::max(t, -16777216.0f), 16777216.0f);
-    const float fs0 = std::floor(s), ft0 = std::floor(t);
-    fs = s - fs0, ft = t - ft0;
-    i0 = wrap(int32_t(fs0), TW), j0 = wrap(int32_t(ft0), TH);
-    i1 = wrap(i0 + 1, TW), j1 = wrap(j0 + 1, TH);
-  } else {
-    s = std::min(std::max(s, 0.0f), float(TW - 1));
-    t = std::min(std::max(t, 0.0f), float(TH - 1));
-    const float fs0 = std::floor(s), ft0 = std::floor(t);
-    fs = s - fs0, ft = t - ft0;
-    i0 = int32_t(fs0), j0 = int32_t(ft0);
-    i1 = std::min(i0 + 1, TW - 1), j1 = std::min(j0 + 1, TH - 1);
+
+  // Adds weight x the bilinear sample of level `level` at level-0 texel coordinates (s, t)
+  // to out (first: out = instead of +=).
+  void bilinear(uint32_t level, float s, float t, float weight, float* out, bool first) const {
+    const Level& L = levels[level];
+    const int32_t TW = L.width, TH = L.height;
+    if (level > 0) {
+      s = (s + 0.5f) * L.scale_s - 0.5f;
+      t = (t + 0.5f) * L.scale_t - 0.5f;
+    }
+    int32_t i0, j0, i1, j1;
+    float fs, ft;
+    if (repeat) {
+      s = std::min(std::max(s, -16777216.0f), 16777216.0f);
+      t = std::min(std::max(t, -16777216.0f), 16777216.0f);
+      const float fs0 = std::floor(s), ft0 = std::floor(t);
+      fs = s - fs0, ft = t - ft0;
+      i0 = wrap(int32_t(fs0), TW), j0 = wrap(int32_t(ft0), TH);
+      i1 = i0 + 1 == TW ? 0 : i0 + 1, j1 = j0 + 1 == TH ? 0 : j0 + 1;
+    } else {
+      s = std::min(std::max(s, 0.0f), float(TW - 1));
+      t = std::min(std::max(t, 0.0f), float(TH - 1));
+      const float fs0 = std::floor(s), ft0 = std::floor(t);
+      fs = s - fs0, ft = t - ft0;
+      i0 = int32_t(fs0), j0 = int32_t(ft0);
+      i1 = std::min(i0 + 1, TW - 1), j1 = std::min(j0 + 1, TH - 1);
+    }
+    const uint32_t C = channels;
+    const float* t00 = L.texels + (size_t(j0) * size_t(TW) + size_t(i0)) * C;
+    const float* t10 = L.texels + (size_t(j0) * size_t(TW) + size_t(i1)) * C;
+    const float* t01 = L.texels + (size_t(j1) * size_t(TW) + size_t(i0)) * C;
+    const float* t11 = L.texels + (size_t(j1) * size_t(TW) + size_t(i1)) * C;
+    for (uint32_t c = 0; c < C; ++c) {
+      float top = (1.0f - fs) * t00[c];
+      top += fs * t10[c];
+      float bottom = (1.0f - fs) * t01[c];
+      bottom += fs * t11[c];
+      float v = (1.0f - ft) * top;
+      v += ft * bottom;
+      if (first)
+        out[c] = weight == 1.0f ? v : weight * v;
+      else
+        out[c] += weight * v;
+    }
   }
-  const float* t00 = tex + (size_t(j0) * size_t(TW) + size_t(i0)) * C;
-  const float* t10 = tex + (size_t(j0) * size_t(TW) + size_t(i1)) * C;
-  const float* t01 = tex + (size_t(j1) * size_t(TW) + size_t(i0)) * C;
-  const float* t11 = tex + (size_t(j1) * size_t(TW) + size_t(i1)) * C;
-  for (uint32_t c = 0; c < C; ++c) {
-    float top = (1.0f - fs) * t00[c];
-    top += fs * t10[c];
-    float bottom = (1.0f - fs) * t01[c];
-    bottom += fs * t11[c];
-    float v = (1.0f - ft) * top;
-    v += ft * bottom;
-    if (first)
-      out[c] = weight == 1.0f ? v : weight * v;
-    else
-      out[c] += weight * v;
+
+  // The texture at texel coordinates (s, t), level of detail lambda (engine.h): level 0 when
+  // lambda <= 0, else the two nearest levels blended.
+  void trilinear(float s, float t, float lambda, float* out) const {
+    const float lod = level_count > 1 ? std::min(lambda, float(level_count - 1)) : 0.0f;
+    if (!(lod > 0.0f)) {
+      bilinear(0, s, t, 1.0f, out, true);
+      return;
+    }
+    const uint32_t l0 = uint32_t(std::floor(lod)), l1 = std::min(l0 + 1, level_count - 1);
+    const float f = lod - float(l0);
+    bilinear(l0, s, t, 1.0f - f, out, true);
+    bilinear(l1, s, t, f, out, false);
   }
+};
+
+// What sampling needs at one pixel centre (cx, cy) of triangle r: the texel coordinates
+// and the level of detail lambda = log2 rho before clamping (0 without mips).
+struct Footprint {
+  float s, t, lambda;
+};
+Footprint footprint(const MeshTriangle& r, float cx, float cy, bool mips) {
+  const float fx = cx - float(r.x0) * 0.0625f, fy = cy - float(r.y0) * 0.0625f;
+  const float iw = plane(r.inv_w, fx, fy);
+  Footprint f;
+  f.s = plane(r.s_w, fx, fy) / iw;
+  f.t = plane(r.t_w, fx, fy) / iw;
+  f.lambda = 0.0f;
+  if (mips) {
+    // d(s, t)/d(x, y) of s = S / Iw with S, Iw affine: (S_x - s Iw_x) / Iw.
+    const float s_x = (r.s_w[1] - f.s * r.inv_w[1]) / iw, s_y = (r.s_w[2] - f.s * r.inv_w[2]) / iw;
+    const float t_x = (r.t_w[1] - f.t * r.inv_w[1]) / iw, t_y = (r.t_w[2] - f.t * r.inv_w[2]) / iw;
+    const float rho = std::max(std::sqrt(s_x * s_x + t_x * t_x), std::sqrt(s_y * s_y + t_y * t_y));
+    f.lambda = std::log2(std::max(rho, 1e-30f));
+  }
+  return f;
 }
 
-}  // namespace
+// One texture of Engine::render_mesh_textures against the texel space the views were set
+// up in (the largest texture's): its texel coordinates are the space's scaled by (kx, ky)
+// about texel centres, its level of detail the space's plus lambda_offset (engine.h);
+// same_space: the space's own size, sampled from the space's coordinates as they are.
+struct TextureInSpace {
+  Sampler sampler;
+  float kx = 1, ky = 1, lambda_offset = 0;
+  bool same_space = true;
+};
 
-void shade_tile(const MeshRenderDesc& d, const ViewSetup& setup, uint32_t tx, uint32_t ty, uint32_t* coverage,
-                float* pixels) {
+// The nearest triangle at each pixel of tile (tx, ty): best[(j - j0) kMeshTile + (i - i0)]
+// is an index into setup.triangles, or kNoMeshTriangle where the pixel is empty.
+void visible_in_tile(const MeshRenderDesc& d, const ViewSetup& setup, uint32_t tx, uint32_t ty, uint32_t* best_of) {
   const uint32_t bin = ty * tiles_x(d) + tx;
   const uint32_t first = setup.bin_offsets[bin], last = setup.bin_offsets[bin + 1];
-  const uint32_t C = d.channels;
   const uint32_t i0 = tx * shader::kMeshTile, i1 = std::min(d.width, (tx + 1) * shader::kMeshTile);
   const uint32_t j0 = ty * shader::kMeshTile, j1 = std::min(d.height, (ty + 1) * shader::kMeshTile);
   // Visibility triangle by triangle over the pixels of its snapped box only (the kernel
   // walks the list pixel by pixel; the same updates in the same order per pixel, so the
   // same winner): most triangles of a detailed mesh cover a few pixels of the tile.
   constexpr uint32_t T = shader::kMeshTile;
-  uint32_t best_of[T * T];
   float best_z_of[T * T];
   std::fill(best_of, best_of + T * T, kNoMeshTriangle);
   for (uint32_t k = first; k < last; ++k) {
@@ -119,9 +187,21 @@ void shade_tile(const MeshRenderDesc& d, const ViewSetup& setup, uint32_t tx, ui
         if (best_of[t] == kNoMeshTriangle || z > best_z_of[t]) best_of[t] = setup.bin_items[k], best_z_of[t] = z;
       }
   }
+}
+
+}  // namespace
+
+void shade_tile(const MeshRenderDesc& d, const ViewSetup& setup, uint32_t tx, uint32_t ty, uint32_t* coverage,
+                float* pixels) {
+  constexpr uint32_t T = shader::kMeshTile;
+  uint32_t best_of[T * T];
+  visible_in_tile(d, setup, tx, ty, best_of);
+  const Sampler sampler(d);
+  const uint32_t C = d.channels;
+  const uint32_t i0 = tx * T, i1 = std::min(d.width, (tx + 1) * T);
+  const uint32_t j0 = ty * T, j1 = std::min(d.height, (ty + 1) * T);
   for (uint32_t j = j0; j < j1; ++j)
     for (uint32_t i = i0; i < i1; ++i) {
-      const float cx = float(i) + 0.5f, cy = float(j) + 0.5f;
       const uint32_t best = best_of[(j - j0) * T + (i - i0)];
       const size_t p = size_t(j) * d.width + i;
       float* out = pixels + p * C;
@@ -132,34 +212,66 @@ void shade_tile(const MeshRenderDesc& d, const ViewSetup& setup, uint32_t tx, ui
       }
       const MeshTriangle& r = setup.triangles[best];
       coverage[p] = r.index;
-      const float fx = cx - float(r.x0) * 0.0625f, fy = cy - float(r.y0) * 0.0625f;
-      const float iw = plane(r.inv_w, fx, fy);
-      const float s = plane(r.s_w, fx, fy) / iw;
-      const float t = plane(r.t_w, fx, fy) / iw;
-      float lod = 0.0f;
-      if (d.mip_levels > 1) {
-        // d(s, t)/d(x, y) of s = S / Iw with S, Iw affine: (S_x - s Iw_x) / Iw.
-        const float s_x = (r.s_w[1] - s * r.inv_w[1]) / iw, s_y = (r.s_w[2] - s * r.inv_w[2]) / iw;
-        const float t_x = (r.t_w[1] - t * r.inv_w[1]) / iw, t_y = (r.t_w[2] - t * r.inv_w[2]) / iw;
-        const float rho = std::max(std::sqrt(s_x * s_x + t_x * t_x), std::sqrt(s_y * s_y + t_y * t_y));
-        lod = std::min(std::log2(std::max(rho, 1e-30f)), float(d.mip_levels - 1));
-      }
-      if (!(lod > 0.0f)) {
-        sample_level(d, 0, s, t, 1.0f, out, true);
-        continue;
-      }
-      const uint32_t l0 = uint32_t(std::floor(lod)), l1 = std::min(l0 + 1, d.mip_levels - 1);
-      const float f = lod - float(l0);
-      sample_level(d, l0, s, t, 1.0f - f, out, true);
-      sample_level(d, l1, s, t, f, out, false);
+      const Footprint f = footprint(r, float(i) + 0.5f, float(j) + 0.5f, d.mip_levels > 1);
+      sampler.trilinear(f.s, f.t, f.lambda, out);
     }
 }
 
+namespace {
+
+// shade_tile for several textures at once: one visibility pass and one footprint per
+// pixel, then every texture sampled; texture k's pixels start texture_stride floats after
+// texture k - 1's.
+void shade_tile_textures(const MeshRenderDesc& d, const std::vector<TextureInSpace>& textures, const ViewSetup& setup,
+                         uint32_t tx, uint32_t ty, size_t texture_stride, uint32_t* coverage, float* pixels) {
+  constexpr uint32_t T = shader::kMeshTile;
+  uint32_t best_of[T * T];
+  visible_in_tile(d, setup, tx, ty, best_of);
+  bool mips = false;
+  for (const TextureInSpace& k : textures) mips = mips || k.sampler.level_count > 1;
+  const uint32_t C = d.channels;
+  const uint32_t i0 = tx * T, i1 = std::min(d.width, (tx + 1) * T);
+  const uint32_t j0 = ty * T, j1 = std::min(d.height, (ty + 1) * T);
+  // The covered pixels' footprints first, then texture after texture (one texture's
+  // levels stay in the cache while the tile samples it).
+  size_t at[T * T];
+  Footprint fp[T * T];
+  uint32_t m = 0;
+  for (uint32_t j = j0; j < j1; ++j)
+    for (uint32_t i = i0; i < i1; ++i) {
+      const uint32_t best = best_of[(j - j0) * T + (i - i0)];
+      const size_t p = size_t(j) * d.width + i;
+      if (best == kNoMeshTriangle) {
+        coverage[p] = kNoMeshTriangle;
+        for (size_t k = 0; k < textures.size(); ++k)
+          for (uint32_t c = 0; c < C; ++c) pixels[k * texture_stride + p * C + c] = 0.0f;
+        continue;
+      }
+      const MeshTriangle& r = setup.triangles[best];
+      coverage[p] = r.index;
+      at[m] = p, fp[m] = footprint(r, float(i) + 0.5f, float(j) + 0.5f, mips), ++m;
+    }
+  for (size_t k = 0; k < textures.size(); ++k) {
+    const TextureInSpace& x = textures[k];
+    float* out = pixels + k * texture_stride;
+    if (x.same_space) {
+      for (uint32_t q = 0; q < m; ++q) x.sampler.trilinear(fp[q].s, fp[q].t, fp[q].lambda, out + at[q] * C);
+      continue;
+    }
+    // Texel centres of the texture: s_k + 0.5 = (s + 0.5) kx, as between mip levels.
+    for (uint32_t q = 0; q < m; ++q)
+      x.sampler.trilinear((fp[q].s + 0.5f) * x.kx - 0.5f, (fp[q].t + 0.5f) * x.ky - 0.5f, fp[q].lambda + x.lambda_offset,
+                          out + at[q] * C);
+  }
+}
+
+}  // namespace
 }  // namespace mesh
 
 void size_mesh_renders(const MeshRenderDesc& d, MeshRenders& out) {
   check_mesh_render(d);
   out.width = d.width, out.height = d.height, out.count = uint32_t(d.cameras.size()), out.channels = d.channels;
+  out.textures = 1;
   const size_t n = size_t(d.width) * d.height;
   out.coverage.resize(n * out.count);
   out.pixels.resize(n * out.count * d.channels);
@@ -177,6 +289,42 @@ void Engine::render_mesh(const MeshRenderDesc& d, MeshRenders& out) {
     const uint32_t v = item / ty, row = item % ty;
     for (uint32_t a = 0; a < tx; ++a)
       mesh::shade_tile(d, setups[v], a, row, out.coverage.data() + v * n, out.pixels.data() + v * n * d.channels);
+  }, 1);
+}
+
+void Engine::render_mesh_textures(const MeshRenderDesc& d, const std::vector<MeshTexture>& textures, MeshRenders& out) {
+  if (textures.empty()) throw EngineError("render_mesh_textures: no texture");
+  // The texel space of the largest texture (fewest rounding steps for the others).
+  size_t largest = 0;
+  for (size_t k = 1; k < textures.size(); ++k)
+    if (uint64_t(textures[k].width) * textures[k].height > uint64_t(textures[largest].width) * textures[largest].height)
+      largest = k;
+  std::vector<mesh::TextureInSpace> in_space;
+  for (const MeshTexture& t : textures) {
+    MeshRenderDesc dk = d;
+    dk.cameras.clear(), dk.triangle_count = 0;  // the views are checked with `space` below
+    dk.texture = t.texels, dk.texture_width = t.width, dk.texture_height = t.height, dk.mip_levels = t.mip_levels;
+    check_mesh_render(dk);
+    const double kx = double(t.width) / textures[largest].width, ky = double(t.height) / textures[largest].height;
+    in_space.push_back({mesh::Sampler(dk), float(kx), float(ky), float(0.5 * std::log2(kx * ky)), kx == 1.0 && ky == 1.0});
+  }
+  MeshRenderDesc space = d;
+  space.texture = textures[largest].texels;
+  space.texture_width = textures[largest].width, space.texture_height = textures[largest].height;
+  space.mip_levels = textures[largest].mip_levels;
+  size_mesh_renders(space, out);
+  const size_t n = size_t(d.width) * d.height, stride = n * out.count * d.channels;
+  out.textures = uint32_t(textures.size());
+  out.pixels.resize(stride * textures.size());
+  const uint32_t tx = mesh::tiles_x(d), ty = mesh::tiles_y(d);
+  std::vector<mesh::ViewSetup> setups(out.count);
+  const unsigned threads = std::max(1u, device().backend == "cpu" ? device().threads : std::thread::hardware_concurrency());
+  parallel_for(out.count, threads, [&](uint32_t v) { setups[v] = mesh::setup_view(space, v); }, 1);
+  parallel_for(out.count * ty, threads, [&](uint32_t item) {
+    const uint32_t v = item / ty, row = item % ty;
+    for (uint32_t a = 0; a < tx; ++a)
+      mesh::shade_tile_textures(space, in_space, setups[v], a, row, stride, out.coverage.data() + v * n,
+                                out.pixels.data() + v * n * d.channels);
   }, 1);
 }
 

@@ -142,11 +142,18 @@ size_t mip_chain_texels(uint32_t width, uint32_t height, uint32_t levels);
 uint32_t mip_chain_levels(uint32_t width, uint32_t height);
 
 // Renders, view after view: coverage (triangle index, kNoMeshTriangle where empty) and
-// `channels` floats a pixel.
+// `channels` floats a pixel; with several textures (render_mesh_textures) the pixels hold
+// every view of the first texture, then every view of the next, coverage once.
 struct MeshRenders {
-  uint32_t width = 0, height = 0, count = 0, channels = 0;
+  uint32_t width = 0, height = 0, count = 0, channels = 0, textures = 1;
   std::vector<uint32_t> coverage;
   std::vector<float> pixels;
+};
+
+// One texture of render_mesh_textures: a mip chain laid out as MeshRenderDesc's texture.
+struct MeshTexture {
+  const float* texels = nullptr;
+  uint32_t width = 0, height = 0, mip_levels = 1;
 };
 constexpr uint32_t kNoMeshTriangle = 0xffffffffu;
 
@@ -251,6 +258,22 @@ class Engine {
     render_mesh(desc, out);
     return out;
   }
+
+  // The views of `desc` rendered once per texture of `textures` (desc's own texture is
+  // ignored; its channels and wrap apply to all): what render_mesh gives for each, into
+  // `out` as MeshRenders says. eval scores one layout at ten costs and two resizes, and the
+  // views' rasterization does not depend on the texture. The default is the CPU reference
+  // (engine/cpu/render_mesh.cpp): each view is rasterized once, in the texel space of the
+  // largest texture (whose pixels are render_mesh's, bit for bit), and every texture is
+  // sampled from the kept texel coordinates scaled to its size and level of detail
+  // lambda + log2 sqrt(kx ky) (kx, ky its sides over the largest's); the other textures
+  // agree with render_mesh to fp32 rounding of those coordinates, and to that of the
+  // level of detail where their aspect is not the largest's (eval rounds each side on its
+  // own: kx and ky differ by under one texel, a level-of-detail error below 2^-9 at
+  // 512 texels, finer than GPUs' 8-bit LOD fractions). The Vulkan backend runs
+  // render_mesh.comp once per texture. Throws as render_mesh does, and for no texture.
+  virtual void render_mesh_textures(const MeshRenderDesc& desc, const std::vector<MeshTexture>& textures,
+                                    MeshRenders& out);
 
   // Re-bake sampling (see RebakeTexelsDesc): writes `channels` floats for every owned texel
   // of `texels` (width * height * channels), leaves the others untouched. The CPU backend

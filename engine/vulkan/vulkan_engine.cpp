@@ -258,6 +258,27 @@ class VulkanEngine final : public Engine {
     if (!mesh_renderer_) mesh_renderer_ = std::make_unique<MeshRenderer>(context_, sequence_, max_buffer_);
     mesh_renderer_->render(desc, out);
   }
+  // One kernel render per texture (the GPU rasterizes faster than the host samples).
+  void render_mesh_textures(const MeshRenderDesc& desc, const std::vector<MeshTexture>& textures,
+                            MeshRenders& out) override {
+    if (textures.empty()) throw EngineError("render_mesh_textures: no texture");
+    MeshRenderDesc d = desc;
+    for (size_t k = 0; k < textures.size(); ++k) {
+      d.texture = textures[k].texels;
+      d.texture_width = textures[k].width, d.texture_height = textures[k].height;
+      d.mip_levels = textures[k].mip_levels;
+      render_mesh(d, texture_scratch_);
+      if (k == 0) {
+        out.width = texture_scratch_.width, out.height = texture_scratch_.height;
+        out.count = texture_scratch_.count, out.channels = texture_scratch_.channels;
+        out.textures = uint32_t(textures.size());
+        out.coverage = texture_scratch_.coverage;
+        out.pixels.resize(texture_scratch_.pixels.size() * textures.size());
+      }
+      std::copy(texture_scratch_.pixels.begin(), texture_scratch_.pixels.end(),
+                out.pixels.begin() + long(k * texture_scratch_.pixels.size()));
+    }
+  }
 
   // Re-bake sampling: see Rebaker.
   void rebake_texels(const RebakeTexelsDesc& desc, float* texels) override {
@@ -280,6 +301,7 @@ class VulkanEngine final : public Engine {
   std::unique_ptr<vk::Buffer> pair_a_, pair_b_, pair_out_;
   std::unique_ptr<vk::Buffer> candidates_, scratch_, results_;
   std::unique_ptr<MeshRenderer> mesh_renderer_;  // whole-mesh renders, made on first use
+  MeshRenders texture_scratch_;                  // render_mesh_textures: one texture's renders
   std::unique_ptr<Rebaker> rebaker_;             // re-bake sampling, made on first use
 };
 

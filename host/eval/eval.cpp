@@ -407,28 +407,34 @@ struct RenderScratch {
   std::vector<uint32_t> coverage;
 };
 
-// Renders every view of `m` textured with `tex`, chunk by chunk: fn(first view, views,
-// pixels, coverage) with the `views` views' images (each width x height x channels, one
-// after the other) and their covered triangles, in `scratch` (valid until the next render
-// into it). Chunks hold views of one tile size, at most `per_chunk` of them (0: about
-// kChunkPixels).
+// Renders every view of `m` once per texture of `textures`, chunk by chunk: fn(first view,
+// views, texture, pixels, coverage) with the `views` views' images (each width x height x
+// channels, one after the other) and their covered triangles, in `scratch` (valid until
+// the next render into it). Chunks hold views of one tile size, at most `per_chunk` of
+// them (0: about kChunkPixels for all the textures together). One texture is
+// Engine::render_mesh; several, Engine::render_mesh_textures (each view rasterized once).
 template <class Fn>
-void render_views(engine::Engine& engine, const LayoutMesh& m, const Texture& tex, const std::vector<ViewFrame>& frames,
-                  Timing& timing, RenderScratch& scratch, Fn&& fn, size_t per_chunk = 0) {
-  const uint32_t C = tex.channels;
+void render_views(engine::Engine& engine, const LayoutMesh& m, const std::vector<const Texture*>& textures,
+                  const std::vector<ViewFrame>& frames, Timing& timing, RenderScratch& scratch, Fn&& fn,
+                  size_t per_chunk = 0) {
+  const uint32_t C = textures.front()->channels;
+  const size_t K = textures.size();
   engine::MeshRenderDesc d;
   d.positions = m.positions.data(), d.vertex_count = m.positions.size() / 3;
   d.indices = m.indices.data(), d.triangle_count = m.indices.size() / 3;
   d.uvs = m.uvs.data();
-  d.texture = tex.texels.data(), d.texture_width = tex.width, d.texture_height = tex.height;
-  d.channels = C, d.mip_levels = tex.levels;
+  const Texture& t0 = *textures.front();
+  d.texture = t0.texels.data(), d.texture_width = t0.width, d.texture_height = t0.height;
+  d.channels = C, d.mip_levels = t0.levels;
   d.repeat = m.repeat;
+  std::vector<engine::MeshTexture> mesh_textures;
+  for (const Texture* t : textures) mesh_textures.push_back({t->texels.data(), t->width, t->height, t->levels});
   engine::MeshRenders& r = scratch.renders;
   std::vector<float>& stitched = scratch.pixels;
   std::vector<uint32_t>& stitched_coverage = scratch.coverage;
   for (size_t first = 0; first < frames.size();) {
     const ViewFrame& f0 = frames[first];
-    const size_t limit = per_chunk ? per_chunk : std::max<size_t>(1, kChunkPixels / f0.pixels());
+    const size_t limit = per_chunk ? per_chunk : std::max<size_t>(1, kChunkPixels / (f0.pixels() * K));
     size_t views = 1;
     while (first + views < frames.size() && views < limit && frames[first + views].tile_width() == f0.tile_width() &&
            frames[first + views].tile_height() == f0.tile_height())
@@ -441,11 +447,15 @@ void render_views(engine::Engine& engine, const LayoutMesh& m, const Texture& te
       for (uint32_t b = 0; b < frames[v].tiles_y; ++b)
         for (uint32_t a = 0; a < frames[v].tiles_x; ++a) d.cameras.push_back(frames[v].tile(a, b));
     }
-    const Stopwatch t0;
-    engine.render_mesh(d, r);
-    timing.render += t0.seconds();
+    const Stopwatch t_render;
+    if (K == 1)
+      engine.render_mesh(d, r);
+    else
+      engine.render_mesh_textures(d, mesh_textures, r);
+    timing.render += t_render.seconds();
+    const size_t T = size_t(d.width) * d.height, rendered = T * d.cameras.size();  // pixels a texture
     if (!tiled) {
-      fn(first, views, r.pixels.data(), r.coverage.data());
+      for (size_t k = 0; k < K; ++k) fn(first, views, k, r.pixels.data() + k * rendered * C, r.coverage.data());
       first += views;
       continue;
     }
@@ -463,25 +473,38 @@ void render_views(engine::Engine& engine, const LayoutMesh& m, const Texture& te
       stitched.assign(chunk * C, 0.0f);
       stitched_coverage.assign(chunk, engine::kNoMeshTriangle);
     }
-    const size_t T = size_t(d.width) * d.height;
-    size_t tile_index = 0;
-    for (size_t v = first; v < first + views; ++v) {
-      const ViewFrame& f = frames[v];
-      for (uint32_t b = 0; b < f.tiles_y; ++b)
-        for (uint32_t a = 0; a < f.tiles_x; ++a, ++tile_index) {
-          const float* tile = r.pixels.data() + tile_index * T * C;
-          const uint32_t* tile_coverage = r.coverage.data() + tile_index * T;
-          for (uint32_t j = 0; j < d.height; ++j) {
-            const size_t row = f.offset - base + (size_t(b) * d.height + j) * f.width + size_t(a) * d.width;
-            std::copy(tile + size_t(j) * d.width * C, tile + size_t(j + 1) * d.width * C, stitched.data() + row * C);
-            std::copy(tile_coverage + size_t(j) * d.width, tile_coverage + size_t(j + 1) * d.width,
-                      stitched_coverage.data() + row);
+    for (size_t k = 0; k < K; ++k) {
+      size_t tile_index = 0;
+      for (size_t v = first; v < first + views; ++v) {
+        const ViewFrame& f = frames[v];
+        for (uint32_t b = 0; b < f.tiles_y; ++b)
+          for (uint32_t a = 0; a < f.tiles_x; ++a, ++tile_index) {
+            const float* tile = r.pixels.data() + (k * rendered + tile_index * T) * C;
+            const uint32_t* tile_coverage = r.coverage.data() + tile_index * T;
+            for (uint32_t j = 0; j < d.height; ++j) {
+              const size_t row = f.offset - base + (size_t(b) * d.height + j) * f.width + size_t(a) * d.width;
+              std::copy(tile + size_t(j) * d.width * C, tile + size_t(j + 1) * d.width * C, stitched.data() + row * C);
+              if (k == 0)
+                std::copy(tile_coverage + size_t(j) * d.width, tile_coverage + size_t(j + 1) * d.width,
+                          stitched_coverage.data() + row);
+            }
           }
-        }
+      }
+      fn(first, views, k, stitched.data(), stitched_coverage.data());
     }
-    fn(first, views, stitched.data(), stitched_coverage.data());
     first += views;
   }
+}
+
+// The same with one texture: fn(first view, views, pixels, coverage).
+template <class Fn>
+void render_views(engine::Engine& engine, const LayoutMesh& m, const Texture& tex, const std::vector<ViewFrame>& frames,
+                  Timing& timing, RenderScratch& scratch, Fn&& fn, size_t per_chunk = 0) {
+  render_views(engine, m, std::vector<const Texture*>{&tex}, frames, timing, scratch,
+               [&](size_t first, size_t views, size_t, const float* px, const uint32_t* coverage) {
+                 fn(first, views, px, coverage);
+               },
+               per_chunk);
 }
 
 // fn(v) for every view v < count, views spread over the threads (each view writes only its
@@ -538,9 +561,11 @@ struct Setup {
   std::string shading_warning;   // auto fell back to unlit: why
   LightRig rig;
   ReferenceViews ref_views;
-  // render_views' storage, kept across costs and candidates: the views' renders, and the
-  // maps' renders nested inside them when lit. Setup serves one thread at a time.
-  mutable RenderScratch view_scratch, map_scratch;
+  // render_views' storage, kept across costs and candidates: the views' renders, the maps'
+  // renders nested inside them when lit, and renders of many textures at once (kept apart:
+  // a vector that shrinks and grows again zeroes what it regrows). Setup serves one thread
+  // at a time.
+  mutable RenderScratch view_scratch, map_scratch, many_scratch;
   double image_texels = 0, chart_texels = 0;
   double radius = 0;  // the largest extent of the bounding box
   std::optional<io::AstcOptions> codec;  // EvalOptions::codec
@@ -616,6 +641,12 @@ void render_scored_views(engine::Engine& engine, const Setup& s, const LayoutMes
       per_chunk);
 }
 
+double mean_of(const std::vector<float>& x) {
+  double q = 0;
+  for (float v : x) q += v;
+  return x.empty() ? 0.0 : q / double(x.size());
+}
+
 // Mean GMSD of `m` textured with `tex` against the reference views: the one place eval
 // turns textures into q. The noise floor passes cameras and reference views of its own
 // (shifted by a fraction of a pixel).
@@ -630,16 +661,49 @@ Scores score_views(engine::Engine& engine, const Setup& s, const LayoutMesh& m, 
     gmsd_views(engine, ref.unlit.data() + at, px, &views[first], count, g.data() + first, timing);
     if (lit) gmsd_views(engine, ref.lit.data() + at, lit, &views[first], count, g_lit.data() + first, timing);
   });
-  auto mean = [](const std::vector<float>& x) {
-    double q = 0;
-    for (float v : x) q += v;
-    return x.empty() ? 0.0 : q / double(x.size());
-  };
   Scores r;
-  r.q_unlit = mean(g), r.q_lit = mean(g_lit);
+  r.q_unlit = mean_of(g), r.q_lit = mean_of(g_lit);
   r.q = s.lit ? r.q_lit : r.q_unlit;
   r.views = s.lit ? std::move(g_lit) : std::move(g);
   return r;
+}
+
+// score_views for each texture set of `textures` on one layout, the same scores: unlit,
+// sets share one rasterization of every view (render_views with several textures: a curve
+// costs one rasterization, a sampling per cost), as many at once as keep a chunk near
+// kChunkPixels a texture; lit, one score_views each.
+std::vector<Scores> score_views_many(engine::Engine& engine, const Setup& s, const LayoutMesh& m,
+                                     const std::vector<LayoutTextures>& textures, Timing& timing) {
+  std::vector<Scores> out;
+  if (s.lit || textures.size() == 1) {
+    for (const LayoutTextures& t : textures) out.push_back(score_views(engine, s, m, t, timing));
+    return out;
+  }
+  const std::vector<ViewFrame>& views = s.frames;
+  size_t largest = 1;
+  for (const ViewFrame& f : views) largest = std::max(largest, f.pixels());
+  const size_t batch = std::max<size_t>(1, 2 * kChunkPixels / largest);
+  for (size_t b = 0; b < textures.size(); b += batch) {
+    const size_t e = std::min(textures.size(), b + batch);
+    std::vector<const Texture*> driving;
+    for (size_t k = b; k < e; ++k) driving.push_back(&textures[k].driving);
+    std::vector<std::vector<float>> g(e - b, std::vector<float>(views.size()));
+    // At least two views a chunk: GMSD runs a call's views in parallel.
+    const size_t per_chunk = std::max<size_t>(2, 2 * kChunkPixels / (largest * driving.size()));
+    render_views(engine, m, driving, views, timing, s.many_scratch,
+                 [&](size_t first, size_t count, size_t k, const float* px, const uint32_t*) {
+                   gmsd_views(engine, s.ref_views.unlit.data() + views[first].offset, px, &views[first], count,
+                              g[k].data() + first, timing);
+                 },
+                 per_chunk);
+    for (auto& x : g) {
+      Scores r;
+      r.q = r.q_unlit = mean_of(x);
+      r.views = std::move(x);
+      out.push_back(std::move(r));
+    }
+  }
+  return out;
 }
 
 // The resize that brings a layout's textures to a cost: colour textures (the driving
@@ -908,8 +972,13 @@ Setup set_up(const io::GltfFile& reference, engine::Engine& engine, const EvalOp
     // evaluation's shading's).
     const Resizer users = lanczos_resize(false);
     auto [W, H] = size_at(0.5, s.image_texels, double(ref.full.width) / ref.full.height);
-    const LayoutTextures half = layout_textures(s, ref, resize_lanczos3(ref.full, W, H, false), &users, false, timing);
-    const Scores q = score_views(engine, s, ref, half, timing);
+    // The half-size texture and its texel-phase variants (below) share one rasterization.
+    std::vector<LayoutTextures> phases;
+    for (uint32_t more = 0; more <= 3; ++more)
+      phases.push_back(layout_textures(s, ref, resize_lanczos3(ref.full, W + more, H + more, false), &users, false, timing));
+    const std::vector<Scores> phase_q = score_views_many(engine, s, ref, phases, timing);
+    const LayoutTextures& half = phases[0];
+    const Scores& q = phase_q[0];
     auto widen = [&](const Scores& other) {
       s.noise_floor_unlit = std::max(s.noise_floor_unlit, std::abs(other.q_unlit - q.q_unlit));
       s.noise_floor_lit = std::max(s.noise_floor_lit, std::abs(other.q_lit - q.q_lit));
@@ -929,10 +998,7 @@ Setup set_up(const io::GltfFile& reference, engine::Engine& engine, const EvalOp
     }
     // The texel grid's phase too: one, two and three texels more a side (under 2 % more
     // texels: no trend to see) move every edge of the resized texture against the screen.
-    for (uint32_t more = 1; more <= 3; ++more)
-      widen(score_views(engine, s, ref,
-                        layout_textures(s, ref, resize_lanczos3(ref.full, W + more, H + more, false), &users, false, timing),
-                        timing));
+    for (uint32_t more = 1; more <= 3; ++more) widen(phase_q[more]);
     s.resolution.noise_floor = s.lit ? s.noise_floor_lit : s.noise_floor_unlit;
   }
   s.codec = o.codec;  // after the reference views and the noise floor: those stay uncompressed
@@ -1192,15 +1258,23 @@ EvalResult evaluate(const io::GltfFile& reference, const std::vector<LayoutInput
   size_t step = 0;
   const size_t steps = (layouts.size() + 1) * o.cost_grid.size();
   auto run_curve = [&](const LayoutMesh& m, double aspect, const Resizer& resize) {
-    Curve c;
+    // Every cost's textures first, then one scoring of them all (score_views_many).
+    std::vector<LayoutTextures> textures;
     for (double c_r : o.cost_grid) {
-      if (progress) progress("curve " + m.name, step, steps);
-      ++step;
       auto [W, H] = size_at(c_r, s.image_texels, aspect);
       const Stopwatch t0;
       const Image tex = resize.colour(m.full, W, H);
       timing.textures += t0.seconds();
-      Scores sc = score_views(engine, s, m, layout_textures(s, m, tex, &resize, true, timing), timing);
+      textures.push_back(layout_textures(s, m, tex, &resize, true, timing));
+    }
+    if (progress) progress("curve " + m.name, step, steps);
+    std::vector<Scores> scores = score_views_many(engine, s, m, textures, timing);
+    step += o.cost_grid.size();
+    Curve c;
+    for (size_t i = 0; i < o.cost_grid.size(); ++i) {
+      const double c_r = o.cost_grid[i];
+      auto [W, H] = size_at(c_r, s.image_texels, aspect);
+      Scores& sc = scores[i];
       CurvePoint p;
       p.c_r = c_r;
       p.c_r_actual = double(W) * H / s.image_texels;

@@ -512,3 +512,95 @@ TEST_CASE("eval: where the cap binds the cropped views are rolled to the asset a
   CHECK(double(r.resolution.resolution) > 1.1 * s_box);
   CHECK(r.resolution.view_pixels > 0.8 * 512.0 * 512.0);  // the budget spent on windows that hold the strip
 }
+
+TEST_CASE("render_mesh_textures: every texture as render_mesh renders it, one rasterization, on both backends",
+          "[eval][engine]") {
+  // eval scores a layout at ten costs from one rasterization of each view: the CPU backend
+  // samples every texture from the largest's texel coordinates, scaled. Against render_mesh
+  // with each texture on its own: the largest bit for bit, those of the same aspect to fp32
+  // rounding of the coordinates, one whose sides were rounded apart to the level-of-detail
+  // offset that costs (engine.h), and a one-level texture (bilinear) too.
+  auto cpu = engine::make_cpu_engine({});
+  auto cpu1 = engine::make_cpu_engine({false, 0, 1});
+  std::unique_ptr<engine::Engine> vk;
+  try {
+    vk = test::lavapipe();
+  } catch (const engine::EngineError& e) {
+    WARN(std::string("no lavapipe, the Vulkan half skipped: ") + e.what());
+  }
+  io::GltfFile file = pipeline::make_demo_asset({16, 256});
+  const io::Asset asset = io::build_asset(file);
+  const Image full = io::decode_image(file.image_bytes[0], "demo");
+  const auto& p = asset.primitives.at(0);
+  struct Size {
+    uint32_t w, h, levels;  // levels 0: the full chain
+  };
+  const std::vector<Size> sizes = {{128, 128, 0}, {256, 256, 0}, {64, 64, 0}, {181, 180, 0}, {100, 100, 1}};
+  for (bool repeat : {false, true})
+    for (uint32_t channels : {1u, 3u}) {
+      std::vector<std::vector<float>> chains;
+      std::vector<engine::MeshTexture> textures;
+      for (const Size& s : sizes) {
+        const Image img = eval::resize_lanczos3(full, s.w, s.h, false);
+        const uint32_t levels = s.levels ? s.levels : engine::mip_chain_levels(s.w, s.h);
+        std::vector<float> chain;
+        for (const Image& l : eval::mip_chain(img, levels)) {
+          const auto y = luminance_plane(l);
+          if (channels == 1) chain.insert(chain.end(), y.begin(), y.end());
+          else chain.insert(chain.end(), l.pixels.begin(), l.pixels.end());
+        }
+        chains.push_back(std::move(chain));
+        textures.push_back({chains.back().data(), s.w, s.h, levels});
+      }
+      engine::MeshRenderDesc d;
+      d.width = 96, d.height = 104;
+      d.cameras = eval::dodecahedron_cameras(p.positions.data(), p.vertex_count());
+      d.positions = p.positions.data(), d.vertex_count = p.vertex_count();
+      d.indices = p.indices.data(), d.triangle_count = p.triangle_count();
+      d.uvs = p.uv_sets[0].uv.data();
+      d.channels = channels, d.repeat = repeat;
+      engine::MeshRenders many;
+      cpu->render_mesh_textures(d, textures, many);
+      REQUIRE(many.textures == textures.size());
+      REQUIRE(many.count == 20);
+      const size_t per_texture = size_t(d.width) * d.height * many.count * channels;
+      REQUIRE(many.pixels.size() == per_texture * textures.size());
+      engine::MeshRenders one_thread;
+      cpu1->render_mesh_textures(d, textures, one_thread);
+      CHECK(one_thread.pixels == many.pixels);  // the same bits on any thread count
+      for (size_t k = 0; k < textures.size(); ++k) {
+        d.texture = textures[k].texels, d.texture_width = textures[k].width, d.texture_height = textures[k].height;
+        d.mip_levels = textures[k].mip_levels;
+        const auto alone = cpu->render_mesh(d);
+        REQUIRE(alone.coverage == many.coverage);
+        float worst = 0;
+        for (size_t i = 0; i < per_texture; ++i)
+          worst = std::max(worst, std::abs(alone.pixels[i] - many.pixels[k * per_texture + i]));
+        INFO("repeat " << repeat << ", channels " << channels << ", texture " << sizes[k].w << "x" << sizes[k].h
+                       << ": max |alone - many| = " << worst);
+        if (k == 1) {
+          CHECK(worst == 0.0f);  // the largest: the space the views were set up in
+        } else if (sizes[k].w != sizes[k].h) {
+          // Its level of detail is off by half log2 of its sides' ratios against the
+          // largest's; a pixel's value moves by at most that times its two levels' difference.
+          const double offset = 0.5 * std::abs(std::log2((181.0 / 256) / (180.0 / 256)));
+          CHECK(worst <= offset + 1e-4);
+          CHECK(worst > 0.0f);
+        } else {
+          CHECK(worst <= 1e-4f);
+        }
+      }
+      if (vk) {
+        // The Vulkan backend renders each texture with its kernel: within the aspect offset
+        // above and the kernel's rounding of CPU's.
+        engine::MeshRenders on_vk;
+        vk->render_mesh_textures(d, textures, on_vk);
+        REQUIRE(on_vk.coverage == many.coverage);
+        float worst = 0;
+        for (size_t i = 0; i < many.pixels.size(); ++i) worst = std::max(worst, std::abs(on_vk.pixels[i] - many.pixels[i]));
+        INFO("vulkan: max |cpu - vulkan| = " << worst);
+        CHECK(worst <= 5e-3f);
+        CHECK(vk->validation_errors() == 0);
+      }
+    }
+}
