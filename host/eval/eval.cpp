@@ -670,8 +670,9 @@ Scores score_views(engine::Engine& engine, const Setup& s, const LayoutMesh& m, 
 
 // score_views for each texture set of `textures` on one layout, the same scores: unlit,
 // sets share one rasterization of every view (render_views with several textures: a curve
-// costs one rasterization, a sampling per cost), as many at once as keep a chunk near
-// kChunkPixels a texture; lit, one score_views each.
+// costs one rasterization, a sampling per cost), as many at once as keep a chunk of two
+// views within 2 kChunkPixels (Duck's 1248-px views: all ten costs; Fox's 1696: six);
+// lit, one score_views each.
 std::vector<Scores> score_views_many(engine::Engine& engine, const Setup& s, const LayoutMesh& m,
                                      const std::vector<LayoutTextures>& textures, Timing& timing) {
   std::vector<Scores> out;
@@ -682,7 +683,8 @@ std::vector<Scores> score_views_many(engine::Engine& engine, const Setup& s, con
   const std::vector<ViewFrame>& views = s.frames;
   size_t largest = 1;
   for (const ViewFrame& f : views) largest = std::max(largest, f.pixels());
-  const size_t batch = std::max<size_t>(1, 2 * kChunkPixels / largest);
+  // A batch's chunk of two views holds at most 2 kChunkPixels for all its textures.
+  const size_t batch = std::max<size_t>(1, kChunkPixels / largest);
   for (size_t b = 0; b < textures.size(); b += batch) {
     const size_t e = std::min(textures.size(), b + batch);
     std::vector<const Texture*> driving;
