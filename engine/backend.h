@@ -12,9 +12,10 @@ void check_view_set(const ViewSetDesc& desc);
 
 // Throws EngineError for a MeshRenderDesc that breaks its limits.
 void check_mesh_render(const MeshRenderDesc& desc);
-// Checks `desc` and sizes `out` for every camera (its storage kept when large enough; the
-// renderers write every pixel).
-void size_mesh_renders(const MeshRenderDesc& desc, MeshRenders& out);
+// Checks `desc` and sizes `out` for every camera and `textures` textures (its storage kept
+// when large enough, and never shrunk then regrown within a call: a regrown vector is
+// zeroed; the renderers write every pixel).
+void size_mesh_renders(const MeshRenderDesc& desc, MeshRenders& out, uint32_t textures = 1);
 
 // Throws EngineError for a RebakeTexelsDesc that breaks its rules.
 void check_rebake_texels(const RebakeTexelsDesc& desc);

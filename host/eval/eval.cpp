@@ -562,10 +562,10 @@ struct Setup {
   LightRig rig;
   ReferenceViews ref_views;
   // render_views' storage, kept across costs and candidates: the views' renders, the maps'
-  // renders nested inside them when lit, and renders of many textures at once (kept apart:
-  // a vector that shrinks and grows again zeroes what it regrows). Setup serves one thread
-  // at a time.
-  mutable RenderScratch view_scratch, map_scratch, many_scratch;
+  // renders nested inside them when lit, renders of many textures at once and of a pair
+  // (score_against_own_reference), each kept apart: a vector that shrinks and grows again
+  // zeroes what it regrows. Setup serves one thread at a time.
+  mutable RenderScratch view_scratch, map_scratch, many_scratch, pair_scratch;
   double image_texels = 0, chart_texels = 0;
   double radius = 0;  // the largest extent of the bounding box
   std::optional<io::AstcOptions> codec;  // EvalOptions::codec
@@ -780,7 +780,7 @@ Scores score_against_own_reference(engine::Engine& engine, const Setup& s, const
     return score_views(engine, s, m, tex, timing, &frames, &ref);
   }
   std::vector<float> g(frames.size()), ref_chunk;
-  render_views(engine, m, {&reference.driving, &tex.driving}, frames, timing, s.many_scratch,
+  render_views(engine, m, {&reference.driving, &tex.driving}, frames, timing, s.pair_scratch,
                [&](size_t first, size_t count, size_t k, const float* px, const uint32_t*) {
                  const size_t n = frames[first + count - 1].offset + frames[first + count - 1].pixels() - frames[first].offset;
                  if (k == 0) {
