@@ -1,6 +1,7 @@
-// Whole-mesh renders, the parts both backends share: triangle set-up and binning (host
-// code, double precision, made once per view) and the per-pixel shading of one tile that
-// render_mesh.comp mirrors operation for operation.
+// Whole-mesh renders, the part both backends share: triangle set-up and binning (host
+// code, double precision, made once per view). The per-pixel shading of a tile is the CPU
+// backend's (cpu/render_mesh.cpp, shade_tile), which render_mesh.comp mirrors operation
+// for operation.
 #pragma once
 
 #include "engine.h"
@@ -31,10 +32,5 @@ uint32_t tiles_x(const MeshRenderDesc& d);
 uint32_t tiles_y(const MeshRenderDesc& d);
 
 ViewSetup setup_view(const MeshRenderDesc& d, uint32_t view);
-
-// Shades tile (tx, ty) of one view: writes coverage and pixels of the view's image (the
-// full width x height image of this view, not the batch).
-void shade_tile(const MeshRenderDesc& d, const ViewSetup& setup, uint32_t tx, uint32_t ty, uint32_t* coverage,
-                float* pixels);
 
 }  // namespace uvpress::engine::mesh

@@ -198,41 +198,13 @@ void visible_in_tile(const MeshRenderDesc& d, const ViewSetup& setup, uint32_t t
   }
 }
 
-}  // namespace
-
-void shade_tile(const MeshRenderDesc& d, const ViewSetup& setup, uint32_t tx, uint32_t ty, uint32_t* coverage,
-                float* pixels) {
-  constexpr uint32_t T = shader::kMeshTile;
-  uint32_t best_of[T * T];
-  visible_in_tile(d, setup, tx, ty, best_of);
-  const Sampler sampler(d);
-  const uint32_t C = d.channels;
-  const uint32_t i0 = tx * T, i1 = std::min(d.width, (tx + 1) * T);
-  const uint32_t j0 = ty * T, j1 = std::min(d.height, (ty + 1) * T);
-  for (uint32_t j = j0; j < j1; ++j)
-    for (uint32_t i = i0; i < i1; ++i) {
-      const uint32_t best = best_of[(j - j0) * T + (i - i0)];
-      const size_t p = size_t(j) * d.width + i;
-      float* out = pixels + p * C;
-      if (best == kNoMeshTriangle) {
-        coverage[p] = kNoMeshTriangle;
-        zero_pixel(out, C);
-        continue;
-      }
-      const MeshTriangle& r = setup.triangles[best];
-      coverage[p] = r.index;
-      const Footprint f = footprint(r, float(i) + 0.5f, float(j) + 0.5f, d.mip_levels > 1);
-      sampler.trilinear(f.s, f.t, f.lambda, out);
-    }
-}
-
-namespace {
-
-// shade_tile for several textures at once: one visibility pass and one footprint per
-// pixel, then every texture sampled; texture k's pixels start texture_stride floats after
-// texture k - 1's.
-void shade_tile_textures(const MeshRenderDesc& d, const std::vector<TextureInSpace>& textures, const ViewSetup& setup,
-                         uint32_t tx, uint32_t ty, size_t texture_stride, uint32_t* coverage, float* pixels) {
+// Shades tile (tx, ty) of one view for every texture: one visibility pass and one
+// footprint per pixel, then every texture sampled; writes coverage and pixels of the
+// view's image (the full width x height image of this view, not the batch), texture k's
+// pixels texture_stride floats after texture k - 1's. render_mesh.comp mirrors it, one
+// texture, operation for operation.
+void shade_tile(const MeshRenderDesc& d, const std::vector<TextureInSpace>& textures, const ViewSetup& setup,
+                uint32_t tx, uint32_t ty, size_t texture_stride, uint32_t* coverage, float* pixels) {
   constexpr uint32_t T = shader::kMeshTile;
   uint32_t best_of[T * T];
   visible_in_tile(d, setup, tx, ty, best_of);
@@ -286,24 +258,14 @@ void size_mesh_renders(const MeshRenderDesc& d, MeshRenders& out, uint32_t textu
   out.pixels.resize(n * out.count * d.channels * textures);
 }
 
-void Engine::render_mesh(const MeshRenderDesc& d, MeshRenders& out) {
-  size_mesh_renders(d, out);
-  const size_t n = size_t(d.width) * d.height;
-  const uint32_t tx = mesh::tiles_x(d), ty = mesh::tiles_y(d);
-  std::vector<mesh::ViewSetup> setups(out.count);
-  const unsigned threads = std::max(1u, device().backend == "cpu" ? device().threads : std::thread::hardware_concurrency());
-  // Work items: view set-ups, then tile rows of every view; results depend only on the item.
-  parallel_for(out.count, threads, [&](uint32_t v) { setups[v] = mesh::setup_view(d, v); }, 1);
-  parallel_for(out.count * ty, threads, [&](uint32_t item) {
-    const uint32_t v = item / ty, row = item % ty;
-    for (uint32_t a = 0; a < tx; ++a)
-      mesh::shade_tile(d, setups[v], a, row, out.coverage.data() + v * n, out.pixels.data() + v * n * d.channels);
-  }, 1);
-}
+namespace {
 
-void Engine::render_mesh_textures(const MeshRenderDesc& d, const std::vector<MeshTexture>& textures, MeshRenders& out) {
+// Engine::render_mesh and render_mesh_textures on the CPU: the views set up in the texel
+// space of the largest texture (the fewest rounding steps for the others), then tile rows
+// of every view; results depend only on the work item, not on the thread count.
+void render_on_cpu(const Engine& engine, const MeshRenderDesc& d, const std::vector<MeshTexture>& textures,
+                   MeshRenders& out) {
   if (textures.empty()) throw EngineError("render_mesh_textures: no texture");
-  // The texel space of the largest texture (fewest rounding steps for the others).
   size_t largest = 0;
   for (size_t k = 1; k < textures.size(); ++k)
     if (uint64_t(textures[k].width) * textures[k].height > uint64_t(textures[largest].width) * textures[largest].height)
@@ -325,14 +287,25 @@ void Engine::render_mesh_textures(const MeshRenderDesc& d, const std::vector<Mes
   const size_t n = size_t(d.width) * d.height, stride = n * out.count * d.channels;
   const uint32_t tx = mesh::tiles_x(d), ty = mesh::tiles_y(d);
   std::vector<mesh::ViewSetup> setups(out.count);
-  const unsigned threads = std::max(1u, device().backend == "cpu" ? device().threads : std::thread::hardware_concurrency());
+  const DeviceInfo device = engine.device();
+  const unsigned threads = std::max(1u, device.backend == "cpu" ? device.threads : std::thread::hardware_concurrency());
   parallel_for(out.count, threads, [&](uint32_t v) { setups[v] = mesh::setup_view(space, v); }, 1);
   parallel_for(out.count * ty, threads, [&](uint32_t item) {
     const uint32_t v = item / ty, row = item % ty;
     for (uint32_t a = 0; a < tx; ++a)
-      mesh::shade_tile_textures(space, in_space, setups[v], a, row, stride, out.coverage.data() + v * n,
-                                out.pixels.data() + v * n * d.channels);
+      mesh::shade_tile(space, in_space, setups[v], a, row, stride, out.coverage.data() + v * n,
+                       out.pixels.data() + v * n * d.channels);
   }, 1);
+}
+
+}  // namespace
+
+void Engine::render_mesh(const MeshRenderDesc& d, MeshRenders& out) {
+  render_on_cpu(*this, d, {{d.texture, d.texture_width, d.texture_height, d.mip_levels}}, out);
+}
+
+void Engine::render_mesh_textures(const MeshRenderDesc& d, const std::vector<MeshTexture>& textures, MeshRenders& out) {
+  render_on_cpu(*this, d, textures, out);
 }
 
 }  // namespace uvpress::engine

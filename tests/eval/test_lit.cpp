@@ -59,7 +59,9 @@ TEST_CASE("lit q sees a halved normal map that the unlit q cannot", "[eval][lit]
   CHECK(quarter.q_lit - full.q_lit > 3 * floor_lit);
   CHECK(quarter.q_lit > 1e-3);
 
-  // The unlit q of a lit evaluation is the unlit evaluation's, bit for bit.
+  // The unlit q of a lit evaluation is the unlit evaluation's: to fp32 rounding, since an
+  // unlit curve samples its costs from one rasterization (Engine::render_mesh_textures) and
+  // a lit one renders each cost on its own (render_mesh).
   o.shading = eval::Shading::Unlit;
   t0 = std::chrono::steady_clock::now();
   const eval::EvalResult unlit = eval::evaluate(asset, {}, *engine, o);
@@ -67,7 +69,9 @@ TEST_CASE("lit q sees a halved normal map that the unlit q cannot", "[eval][lit]
   REQUIRE(!unlit.lit);
   // (Curves: each evaluation keeps the input resize its own q prefers, so compare the
   // noise floors, measured with one resize, and the as-written scores below.)
-  CHECK(unlit.noise_floor() == floor_unlit);
+  // (This asset's base colour is flat: its unlit floor, 5e-10, is fp32 rounding itself,
+  // which the two render paths round differently, hence the absolute allowance.)
+  CHECK(unlit.noise_floor() == Approx(floor_unlit).epsilon(1e-4).margin(1e-8));
   WARN("lit eval " << lit_seconds << " s, unlit " << unlit_seconds << " s (" << lit_seconds / unlit_seconds
                    << "x); lit q at c_r 0.25 " << quarter.q_lit << " (floor " << floor_lit
                    << "), unlit " << quarter.q_unlit << " (floor " << floor_unlit << ")");
@@ -113,7 +117,9 @@ TEST_CASE("assets without a normal map keep bit-identical figures under --shadin
   o.shading = eval::Shading::Lit;
   const eval::EvalResult lit = eval::evaluate(demo, {}, *engine, o);
   REQUIRE(lit.lit);
-  CHECK(lit.layouts[0].curve[0].q_unlit == unlit.layouts[0].curve[0].q);
+  // Its unlit q is the unlit evaluation's, to the fp32 rounding of the unlit curve's
+  // shared rasterization (Engine::render_mesh_textures; the lit curve renders each cost).
+  CHECK(lit.layouts[0].curve[0].q_unlit == Approx(unlit.layouts[0].curve[0].q).epsilon(1e-5));
   CHECK(lit.layouts[0].curve[0].q_lit > 0);
 }
 

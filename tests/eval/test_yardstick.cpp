@@ -164,6 +164,23 @@ TEST_CASE("render_mesh trilinear: single-texel detail minified averages out, bil
   for (float v : trilinear.pixels) REQUIRE(v == Approx(0.7354).margin(2e-3));
 }
 
+namespace {
+
+// eval's 20 views of a primitive at 96 x 104 pixels (not square, not a multiple of the
+// tile), its texture left to the caller.
+engine::MeshRenderDesc views_of(const io::Primitive& p, uint32_t channels, bool repeat) {
+  engine::MeshRenderDesc d;
+  d.width = 96, d.height = 104;
+  d.cameras = eval::dodecahedron_cameras(p.positions.data(), p.vertex_count());
+  d.positions = p.positions.data(), d.vertex_count = p.vertex_count();
+  d.indices = p.indices.data(), d.triangle_count = p.triangle_count();
+  d.uvs = p.uv_sets[0].uv.data();
+  d.channels = channels, d.repeat = repeat;
+  return d;
+}
+
+}  // namespace
+
 TEST_CASE("render_mesh: Vulkan (lavapipe, validation on) matches the CPU oracle with trilinear filtering",
           "[eval][engine]") {
   UVPRESS_LAVAPIPE_OR_SKIP(vk);
@@ -181,14 +198,9 @@ TEST_CASE("render_mesh: Vulkan (lavapipe, validation on) matches the CPU oracle 
         if (channels == 1) chain.insert(chain.end(), y.begin(), y.end());
         else chain.insert(chain.end(), l.pixels.begin(), l.pixels.end());
       }
-      engine::MeshRenderDesc d;
-      d.width = 96, d.height = 104;
-      d.cameras = eval::dodecahedron_cameras(p.positions.data(), p.vertex_count());
-      d.positions = p.positions.data(), d.vertex_count = p.vertex_count();
-      d.indices = p.indices.data(), d.triangle_count = p.triangle_count();
-      d.uvs = p.uv_sets[0].uv.data();
+      engine::MeshRenderDesc d = views_of(p, channels, repeat);
       d.texture = chain.data(), d.texture_width = tex.width, d.texture_height = tex.height;
-      d.channels = channels, d.mip_levels = levels, d.repeat = repeat;
+      d.mip_levels = levels;
       const auto a = cpu->render_mesh(d), b = vk->render_mesh(d);
       REQUIRE(a.coverage == b.coverage);
       float worst = 0;
@@ -552,13 +564,7 @@ TEST_CASE("render_mesh_textures: every texture as render_mesh renders it, one ra
         chains.push_back(std::move(chain));
         textures.push_back({chains.back().data(), s.w, s.h, levels});
       }
-      engine::MeshRenderDesc d;
-      d.width = 96, d.height = 104;
-      d.cameras = eval::dodecahedron_cameras(p.positions.data(), p.vertex_count());
-      d.positions = p.positions.data(), d.vertex_count = p.vertex_count();
-      d.indices = p.indices.data(), d.triangle_count = p.triangle_count();
-      d.uvs = p.uv_sets[0].uv.data();
-      d.channels = channels, d.repeat = repeat;
+      engine::MeshRenderDesc d = views_of(p, channels, repeat);
       engine::MeshRenders many;
       cpu->render_mesh_textures(d, textures, many);
       REQUIRE(many.textures == textures.size());
