@@ -1286,18 +1286,24 @@ EvalResult evaluate(const io::GltfFile& reference, const std::vector<LayoutInput
   size_t step = 0;
   const size_t steps = (layouts.size() + 1) * o.cost_grid.size();
   auto run_curve = [&](const LayoutMesh& m, double aspect, const Resizer& resize) {
-    // Every cost's textures first, then one scoring of them all (score_views_many).
-    std::vector<LayoutTextures> textures;
-    for (double c_r : o.cost_grid) {
-      auto [W, H] = size_at(c_r, s.image_texels, aspect);
-      const Stopwatch t0;
-      const Image tex = resize.colour(m.full, W, H);
-      timing.textures += t0.seconds();
-      textures.push_back(layout_textures(s, m, tex, &resize, true, timing));
+    // Unlit, every cost's textures first, then one scoring of them all (score_views_many);
+    // lit, cost by cost (each cost's maps are three channels a map: ten at once would hold
+    // gigabytes for a 2048-px asset, and lit curves render each cost on its own anyway).
+    const size_t group = s.lit ? 1 : o.cost_grid.size();
+    std::vector<Scores> scores;
+    for (size_t first = 0; first < o.cost_grid.size(); first += group) {
+      std::vector<LayoutTextures> textures;
+      for (size_t i = first; i < std::min(o.cost_grid.size(), first + group); ++i) {
+        auto [W, H] = size_at(o.cost_grid[i], s.image_texels, aspect);
+        const Stopwatch t0;
+        const Image tex = resize.colour(m.full, W, H);
+        timing.textures += t0.seconds();
+        textures.push_back(layout_textures(s, m, tex, &resize, true, timing));
+      }
+      if (progress) progress("curve " + m.name, step, steps);
+      for (Scores& sc : score_views_many(engine, s, m, textures, timing)) scores.push_back(std::move(sc));
+      step += textures.size();
     }
-    if (progress) progress("curve " + m.name, step, steps);
-    std::vector<Scores> scores = score_views_many(engine, s, m, textures, timing);
-    step += o.cost_grid.size();
     Curve c;
     for (size_t i = 0; i < o.cost_grid.size(); ++i) {
       const double c_r = o.cost_grid[i];
