@@ -920,7 +920,7 @@ struct Run {
   std::vector<Prepared> prepared;    // the layouts reparam changes
   json warnings = json::array();
   size_t optimized = 0, infeasible = 0;  // triangles through the triangle stage, those kept at the identity
-  double t_triangle = 0, t_score = 0;
+  double t_triangle = 0, t_score = 0, t_build = 0;  // t_build: every candidate's realize()
   std::unique_ptr<eval::AsWrittenScorer> scorer;  // candidates and the guard: 20 views as written
   std::string score_failure;                      // why eval cannot score the asset
   Realized chosen;                                // the kept candidate, built into `file`
@@ -1241,8 +1241,10 @@ eval::Scored score(Run& run, const io::GltfFile& f, const std::string& name) {
 // it is the first or scores better.
 void consider_candidate(Run& run, const Candidate& c) {
   io::GltfFile f = run.original;
+  const Stopwatch t0;
   Realized r = realize(run.asset, run.layouts, run.prepared, run.layout_base, f, run.engine, run.o, c, run.progress,
                        run.warnings);
+  run.t_build += t0.seconds();
   if (run.scorer && r.overlaps_new == 0) r.q = score(run, f, r.name).q;
   run.result.candidates.push_back({r.name, r.old_texels > 0 ? r.new_texels / r.old_texels : 1.0, r.q, r.overlaps_new});
   // New UV overlaps disqualify a layout whatever its score: never written.
@@ -1484,6 +1486,7 @@ ReparamResult reparam(io::GltfFile& file, engine::Engine& engine, const ReparamO
   result.stages.pack = chosen.t_pack;
   result.stages.rebake = chosen.t_bake;
   result.stages.candidates_and_guard = run.t_score;
+  result.stages.candidates_built = run.t_build;
   result.layout = chosen.name;
   if (resized) result.q = result.guard.q_resize;
   else if (chosen.q >= 0) result.q = chosen.q;
