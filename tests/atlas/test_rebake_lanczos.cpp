@@ -60,6 +60,57 @@ TEST_CASE("rebake_lanczos: a uniform half-size layout is the Lanczos-3 resize", 
   CHECK(worst_area > 0.05);  // the area filter is a different (blurrier) bake
 }
 
+TEST_CASE("rebake_lanczos: a turned, anisotropically shrunk chart is the Lanczos-3 kernel in the new texel axes", "[atlas]") {
+  // The whole 64^2 source mapped by n = c + A (p - 32) (texels), A = R(30 deg) diag(0.4, 0.6):
+  // both axes shrink, so the kernel's coordinates of a source offset d are A d (the
+  // header's V min(S^-1, 1) U^T d with J = A^-1). The reference evaluates that kernel
+  // directly, in double, over every source texel (repeat wrap); the bake steps its sines
+  // along the tap lattice, so a wrong step or axis shows here, not in the uniform resize.
+  const Image src = noise(64, 64, 3);
+  const double ang = M_PI / 6, sx = 0.4, sy = 0.6, c = 24;
+  const double A[2][2] = {{std::cos(ang) * sx, -std::sin(ang) * sy}, {std::sin(ang) * sx, std::cos(ang) * sy}};
+  Quad q;
+  for (int k = 0; k < 4; ++k) {
+    const double px = q.old_uv[2 * k] * 64 - 32, py = q.old_uv[2 * k + 1] * 64 - 32;
+    q.new_uv[2 * k] = float((c + A[0][0] * px + A[0][1] * py) / 48);
+    q.new_uv[2 * k + 1] = float((c + A[1][0] * px + A[1][1] * py) / 48);
+  }
+  atlas::RebakeOptions o;
+  o.width = o.height = 48;
+  o.role = atlas::RebakeRole::Color;
+  const Image lz = atlas::rebake_lanczos(src, {q.mesh()}, o, atlas::rebake(src, {q.mesh()}, o, test::cpu_engine()));
+  const auto l3 = [](double k) { return std::abs(k) < 1e-12 ? 1.0 : 3 * std::sin(M_PI * k) * std::sin(M_PI * k / 3) / (M_PI * M_PI * k * k); };
+  const double det = A[0][0] * A[1][1] - A[0][1] * A[1][0];
+  double worst = 0;
+  size_t checked = 0;
+  for (uint32_t y = 0; y < 48; ++y)
+    for (uint32_t x = 0; x < 48; ++x) {
+      // The preimage of the texel centre; only texels 2 source texels inside the quad.
+      const double nx = x + 0.5 - c, ny = y + 0.5 - c;
+      const double ox = 32 + (A[1][1] * nx - A[0][1] * ny) / det, oy = 32 + (-A[1][0] * nx + A[0][0] * ny) / det;
+      if (ox < 2 || oy < 2 || ox > 62 || oy > 62) continue;
+      double acc[3] = {0, 0, 0}, wsum = 0;
+      for (int ty = -20; ty < 84; ++ty)
+        for (int tx = -20; tx < 84; ++tx) {
+          const double dx = tx + 0.5 - ox, dy = ty + 0.5 - oy;
+          const double kx = A[0][0] * dx + A[0][1] * dy, ky = A[1][0] * dx + A[1][1] * dy;
+          if (std::abs(kx) >= 3 || std::abs(ky) >= 3) continue;
+          const double w = l3(kx) * l3(ky);
+          for (uint32_t ch = 0; ch < 3; ++ch) acc[ch] += w * src.at(uint32_t((tx + 64) % 64), uint32_t((ty + 64) % 64), ch);
+          wsum += w;
+        }
+      for (uint32_t ch = 0; ch < 3; ++ch)
+        worst = std::max(worst, std::abs(std::clamp(acc[ch] / wsum, 0.0, 1.0) - double(lz.at(x, y, ch))));
+      ++checked;
+    }
+  INFO("texels checked " << checked << ", worst difference " << worst);
+  CHECK(checked > 300);
+  // Not closer: the bake's map comes from the float corners (~1e-6 texel off A), and unit
+  // steps of noise move a Lanczos sum by ~10 per texel of shift (the sines taken by libm
+  // per tap differ from the reference by the same 3.6e-5). A wrong kernel is off by ~0.1.
+  CHECK(worst < 1e-4);
+}
+
 TEST_CASE("rebake_lanczos: identity and quarter turns at the same size copy texels, normals keep the area bake", "[atlas]") {
   const Image src = noise(32, 32, 4);
   atlas::RebakeOptions o;
