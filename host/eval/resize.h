@@ -16,15 +16,18 @@ namespace uvpress::eval {
 // and eval's re-baked layouts use it: it never rings and keeps the mean exactly.
 Image resize_area(const Image& image, uint32_t width, uint32_t height);
 
-// Resizes to width x height with a separable Lanczos-3 filter (OpenImageIO's
-// ImageBufAlgo::resize, "lanczos3": support 3 output texels when shrinking, 3 input texels
-// when enlarging, weights normalized, taps past the border read the edge texel), what `gltf-transform resize`, `gltfpack -ts` and image editors do, so
-// the baseline a user would compare against. linear_light: colour channels (grey, or RGB;
-// never alpha) are decoded sRGB -> linear before and encoded after, as a careful tool
-// does; false filters the stored (sRGB) values, as most tools do. Alpha is filtered as
-// stored and colours are not premultiplied (transparent texels bleed their colour, as
-// they do in those tools). Results are clamped to [0,1]: Lanczos rings at edges. The same
-// size copies exactly. Throws std::runtime_error when OpenImageIO fails.
+// Resizes to width x height with a separable Lanczos-3 filter, placed and normalized as
+// OpenImageIO's ImageBufAlgo::resize "lanczos3" does (support 3 output texels when
+// shrinking, 3 input texels when enlarging, weights normalized, taps past the border read
+// the edge texel; agrees with it to 2e-5, its float rounding), what `gltf-transform
+// resize`, `gltfpack -ts` and image editors do, so the baseline a user would compare
+// against. Weights per axis in double, two passes, OpenMP over rows (same bits on any
+// thread count). linear_light: colour channels (grey, or RGB; never alpha) are decoded
+// sRGB -> linear before and encoded after, as a careful tool does; false filters the
+// stored (sRGB) values, as most tools do. Alpha is filtered as stored and colours are not
+// premultiplied (transparent texels bleed their colour, as they do in those tools).
+// Results are clamped to [0,1]: Lanczos rings at edges. The same size copies exactly.
+// Throws std::runtime_error for an empty image or size.
 Image resize_lanczos3(const Image& image, uint32_t width, uint32_t height, bool linear_light);
 
 // The mip chain an engine builds for a colour texture (glGenerateMipmap on an sRGB
