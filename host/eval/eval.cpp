@@ -334,7 +334,11 @@ Texture view_texture(const Image& image, TextureFilter filter, bool rgb = false,
   t.levels = filter == TextureFilter::Trilinear ? engine::mip_chain_levels(image.width, image.height) : 1;
   std::optional<io::AstcCodec> astc;
   if (codec) astc.emplace(colour, *codec);
-  for (Image level : mip_chain(image, t.levels, colour)) {
+  std::vector<Image> chain = mip_chain(image, t.levels, colour);
+  size_t total = 0;
+  for (const Image& level : chain) total += size_t(level.width) * level.height * t.channels;
+  t.texels.reserve(total);
+  for (Image& level : chain) {
     if (astc) {
       const auto blocks = astc->compress(level);
       level = astc->decompress(blocks.data(), blocks.size(), level.width, level.height, level.channels);

@@ -127,10 +127,14 @@ Image resize_lanczos3(const Image& in, uint32_t W, uint32_t H, bool linear_light
   if (W == 0 || H == 0 || in.width == 0 || in.height == 0 || in.channels == 0)
     throw std::runtime_error("resize_lanczos3: empty image or size");
   const uint32_t C = in.channels;
-  std::vector<float> src = in.pixels;
-  if (linear_light)
-    for (size_t k = 0; k < src.size(); ++k)
-      if (is_colour(uint32_t(k % C), C)) src[k] = decode(src[k]);
+  // Stored values are read in place; linear light decodes a copy.
+  std::vector<float> decoded;
+  if (linear_light) {
+    decoded = in.pixels;
+    for (size_t k = 0; k < decoded.size(); ++k)
+      if (is_colour(uint32_t(k % C), C)) decoded[k] = decode(decoded[k]);
+  }
+  const float* src = linear_light ? decoded.data() : in.pixels.data();
   // Separable: rows first (every input row to the new width), then columns; each output
   // texel is its own sum in a fixed order, so the threads do not change the bits.
   const AxisTaps tx = lanczos3_taps(in.width, W), ty = lanczos3_taps(in.height, H);
