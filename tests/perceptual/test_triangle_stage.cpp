@@ -86,6 +86,38 @@ TEST_CASE("Triangle stage: flat signal shrinks, detail keeps its size, every res
   }
 }
 
+TEST_CASE("Triangle stage: --early-stop ends stalled searches with the same answers as the whole budget", "[perceptual][bo]") {
+  // Stop rule (triangle_stage.cpp, record): at least 30 evaluations, then stop after 25
+  // without a 0.1 % gain; `evaluations` stays the cap. Against the whole budget (the
+  // default): every triangle feasible, detail kept and flat shrunk as before.
+  Synthetic s = synthetic();
+  auto engine = engine::make_cpu_engine({});
+  perceptual::TriangleStageOptions o;
+  REQUIRE_FALSE(o.early_stop);  // the default: the whole budget
+  o.early_stop = true;
+  o.evaluations = 100;
+  const std::vector<uint32_t> which = detailed_then_flat();
+  const auto early = perceptual::optimize_triangles(*engine, s.input(), s.texture, o, which);
+  o.early_stop = false;
+  const auto full = perceptual::optimize_triangles(*engine, s.input(), s.texture, o, which);
+  REQUIRE(early.size() == full.size());
+  int total = 0;
+  for (size_t k = 0; k < early.size(); ++k) {
+    INFO("triangle " << which[k] << ": evaluations " << early[k].evaluations << ", lambda " << early[k].lambda1 << " "
+                     << early[k].lambda2 << " (whole budget " << full[k].lambda1 << " " << full[k].lambda2 << ")");
+    CHECK(early[k].evaluations >= 30);
+    CHECK(early[k].evaluations <= o.evaluations);
+    CHECK(full[k].evaluations == o.evaluations);
+    CHECK(early[k].feasible);
+    CHECK(early[k].gmsd < o.epsilon);
+    const double area = early[k].lambda1 * early[k].lambda2;
+    if (k < 4) CHECK(std::min(early[k].lambda1, early[k].lambda2) > 0.7);  // detail keeps its size
+    else CHECK(area < 0.02);                                             // flat shrinks
+    total += early[k].evaluations;
+  }
+  CHECK(total < int(early.size()) * 70);  // the stop does stop: fewer than 70 a triangle on average
+}
+
 TEST_CASE("Triangle stage is deterministic whatever the thread count and overlap", "[perceptual][bo]") {
   Synthetic s = synthetic();
   perceptual::TriangleStageOptions o;
