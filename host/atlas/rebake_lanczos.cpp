@@ -50,13 +50,18 @@ constexpr double kMaxShrink = 3;
 // sin(pi k), sin(pi k / 3) follow by the angle-addition rule instead of a libm call per tap
 // (4 sin calls a tap were ~60 % of this bake's time). Over a kernel's at most ~30 steps the
 // recurrence drifts by a few ulps of double, far below the float result's rounding.
+struct Step {
+  double ds, dc;  // sin and cos of the step
+  explicit Step(double step) : ds(std::sin(step)), dc(std::cos(step)) {}
+};
 struct Phasor {
-  double s = 0, c = 1, ds = 0, dc = 1;
-  Phasor() = default;
-  Phasor(double angle, double step) : s(std::sin(angle)), c(std::cos(angle)), ds(std::sin(step)), dc(std::cos(step)) {}
+  double s, c;
+  Step step;
+  Phasor(double s_, double c_, Step st) : s(s_), c(c_), step(st) {}
+  Phasor(double angle, double step) : Phasor(std::sin(angle), std::cos(angle), Step(step)) {}
   void advance() {
-    const double s2 = s * dc + c * ds;
-    c = c * dc - s * ds;
+    const double s2 = s * step.dc + c * step.ds;
+    c = c * step.dc - s * step.ds;
     s = s2;
   }
 };
@@ -208,11 +213,10 @@ Image rebake_lanczos(const Image& source, const std::vector<RebakeMesh>& meshes,
       const double kx0 = M[0][0] * dx0 + M[0][1] * dy0, ky0 = M[1][0] * dx0 + M[1][1] * dy0;
       Phasor rx1(M_PI * kx0, M_PI * M[0][1]), rx3(M_PI * kx0 / 3, M_PI * M[0][1] / 3);
       Phasor ry1(M_PI * ky0, M_PI * M[1][1]), ry3(M_PI * ky0 / 3, M_PI * M[1][1] / 3);
-      const Phasor cx1(0, M_PI * M[0][0]), cx3(0, M_PI * M[0][0] / 3), cy1(0, M_PI * M[1][0]), cy3(0, M_PI * M[1][0] / 3);
+      const Step cx1(M_PI * M[0][0]), cx3(M_PI * M[0][0] / 3), cy1(M_PI * M[1][0]), cy3(M_PI * M[1][0] / 3);
       for (int sy = y0; sy <= y1; ++sy, rx1.advance(), rx3.advance(), ry1.advance(), ry3.advance()) {
-        Phasor px1 = rx1, px3 = rx3, py1 = ry1, py3 = ry3;
-        px1.ds = cx1.ds, px1.dc = cx1.dc, px3.ds = cx3.ds, px3.dc = cx3.dc;
-        py1.ds = cy1.ds, py1.dc = cy1.dc, py3.ds = cy3.ds, py3.dc = cy3.dc;
+        // Along the row from its first tap: the row's angles, the column steps.
+        Phasor px1(rx1.s, rx1.c, cx1), px3(rx3.s, rx3.c, cx3), py1(ry1.s, ry1.c, cy1), py3(ry3.s, ry3.c, cy3);
         for (int sx = x0; sx <= x1; ++sx, px1.advance(), px3.advance(), py1.advance(), py3.advance()) {
           const double dx = sx + 0.5 - ox, dy = sy + 0.5 - oy;
           const double kx = M[0][0] * dx + M[0][1] * dy, ky = M[1][0] * dx + M[1][1] * dy;

@@ -113,6 +113,9 @@ TEST_CASE("Triangle stage: --early-stop ends stalled searches with the same answ
     const double area = early[k].lambda1 * early[k].lambda2;
     if (k < 4) CHECK(std::min(early[k].lambda1, early[k].lambda2) > 0.7);  // detail keeps its size
     else CHECK(area < 0.02);                                             // flat shrinks
+    // The same answer as the whole budget: the same side of both bounds, area within 2x.
+    CHECK((std::min(full[k].lambda1, full[k].lambda2) > 0.7) == (std::min(early[k].lambda1, early[k].lambda2) > 0.7));
+    CHECK(area == Approx(full[k].lambda1 * full[k].lambda2).epsilon(1.0));
     total += early[k].evaluations;
   }
   CHECK(total < int(early.size()) * 70);  // the stop does stop: fewer than 70 a triangle on average
