@@ -14,8 +14,17 @@ namespace uvpress::eval {
 
 namespace {
 
-// Per output index: (source index, weight) with weights summing to 1.
-std::vector<std::vector<std::pair<uint32_t, double>>> axis_weights(uint32_t from, uint32_t to) {
+// One axis of a separable resize: output k reads `count` input indices with their weights
+// (summing to 1; shorter rows padded with weight-0 taps, which leave every sum's bits alone).
+struct AxisTaps {
+  uint32_t count = 0;              // taps per output texel
+  std::vector<uint32_t> index;     // to * count input texels
+  std::vector<double> weight;      // to * count
+};
+
+// Exact box (area) weights per output index when shrinking, linear interpolation between
+// texel centres (clamped) when enlarging, the identity at the same size.
+AxisTaps area_taps(uint32_t from, uint32_t to) {
   std::vector<std::vector<std::pair<uint32_t, double>>> w(to);
   const double scale = double(from) / to;
   for (uint32_t k = 0; k < to; ++k) {
@@ -34,7 +43,13 @@ std::vector<std::vector<std::pair<uint32_t, double>>> axis_weights(uint32_t from
       w[k] = {{i0, 1 - f}, {i1, f}};
     }
   }
-  return w;
+  AxisTaps t;
+  for (const auto& taps : w) t.count = std::max(t.count, uint32_t(taps.size()));
+  t.index.assign(size_t(to) * t.count, 0), t.weight.assign(size_t(to) * t.count, 0.0);
+  for (uint32_t k = 0; k < to; ++k)
+    for (size_t i = 0; i < w[k].size(); ++i)
+      t.index[size_t(k) * t.count + i] = w[k][i].first, t.weight[size_t(k) * t.count + i] = w[k][i].second;
+  return t;
 }
 
 // Lanczos-3 taps of one axis, as OpenImageIO's resize places them: output texel k samples
@@ -44,12 +59,6 @@ std::vector<std::vector<std::pair<uint32_t, double>>> axis_weights(uint32_t from
 // weights normalized to sum 1. Every output of a row or column shares its axis's taps, so
 // they are worked out once per axis instead of per texel (a 1024^2 texture halved: 0.27 s
 // through OpenImageIO's per-texel iterators, ~10 ms here).
-struct AxisTaps {
-  uint32_t count = 0;              // taps per output texel
-  std::vector<uint32_t> index;     // to * count input texels
-  std::vector<double> weight;      // to * count
-};
-
 AxisTaps lanczos3_taps(uint32_t from, uint32_t to) {
   const double ratio = double(to) / from;       // < 1 shrinking
   const double scale = std::min(1.0, ratio);    // kernel argument per input texel of distance
@@ -98,28 +107,48 @@ float decode(float v) {
   return atlas::srgb_to_linear(v);
 }
 
+// The two passes of a separable resize of `src` (w x h, C channels) to W x H: every input
+// row to the new width into rows of type Row, then the columns; each output is its own sum
+// in tap order, so the threads do not change the bits.
+template <class Row>
+Image separable(const float* src, uint32_t w, uint32_t h, uint32_t C, uint32_t W, uint32_t H, const AxisTaps& tx,
+                const AxisTaps& ty, uint32_t bits) {
+  std::vector<Row> rows(size_t(h) * W * C);
+#pragma omp parallel for schedule(static)
+  for (long j = 0; j < long(h); ++j)
+    for (uint32_t i = 0; i < W; ++i) {
+      const uint32_t* idx = &tx.index[size_t(i) * tx.count];
+      const double* wt = &tx.weight[size_t(i) * tx.count];
+      for (uint32_t c = 0; c < C; ++c) {
+        double acc = 0;
+        for (uint32_t k = 0; k < tx.count; ++k) acc += wt[k] * src[(size_t(j) * w + idx[k]) * C + c];
+        rows[(size_t(j) * W + i) * C + c] = Row(acc);
+      }
+    }
+  Image out;
+  out.width = W, out.height = H, out.channels = C, out.bits = bits;
+  out.pixels.resize(size_t(W) * H * C);
+#pragma omp parallel for schedule(static)
+  for (long j = 0; j < long(H); ++j) {
+    const uint32_t* idx = &ty.index[size_t(j) * ty.count];
+    const double* wt = &ty.weight[size_t(j) * ty.count];
+    for (uint32_t i = 0; i < W; ++i)
+      for (uint32_t c = 0; c < C; ++c) {
+        double acc = 0;
+        for (uint32_t k = 0; k < ty.count; ++k) acc += wt[k] * double(rows[(size_t(idx[k]) * W + i) * C + c]);
+        out.pixels[(size_t(j) * W + i) * C + c] = float(acc);
+      }
+  }
+  return out;
+}
+
 }  // namespace
 
 Image resize_area(const Image& in, uint32_t W, uint32_t H) {
   if (W == in.width && H == in.height) return in;
-  const uint32_t C = in.channels;
-  auto wx = axis_weights(in.width, W), wy = axis_weights(in.height, H);
-  std::vector<double> rows(size_t(in.height) * W * C, 0.0);
-  for (uint32_t j = 0; j < in.height; ++j)
-    for (uint32_t i = 0; i < W; ++i)
-      for (auto [src, w] : wx[i])
-        for (uint32_t c = 0; c < C; ++c) rows[(size_t(j) * W + i) * C + c] += w * in.pixels[(size_t(j) * in.width + src) * C + c];
-  Image out;
-  out.width = W, out.height = H, out.channels = C, out.bits = in.bits;
-  out.pixels.assign(size_t(W) * H * C, 0.0f);
-  for (uint32_t j = 0; j < H; ++j)
-    for (uint32_t i = 0; i < W; ++i)
-      for (uint32_t c = 0; c < C; ++c) {
-        double s = 0;
-        for (auto [src, w] : wy[j]) s += w * rows[(size_t(src) * W + i) * C + c];
-        out.pixels[(size_t(j) * W + i) * C + c] = float(s);
-      }
-  return out;
+  // Rows kept in double: the box keeps the mean exactly.
+  return separable<double>(in.pixels.data(), in.width, in.height, in.channels, W, H, area_taps(in.width, W),
+                           area_taps(in.height, H), in.bits);
 }
 
 Image resize_lanczos3(const Image& in, uint32_t W, uint32_t H, bool linear_light) {
@@ -135,35 +164,8 @@ Image resize_lanczos3(const Image& in, uint32_t W, uint32_t H, bool linear_light
       if (is_colour(uint32_t(k % C), C)) decoded[k] = decode(decoded[k]);
   }
   const float* src = linear_light ? decoded.data() : in.pixels.data();
-  // Separable: rows first (every input row to the new width), then columns; each output
-  // texel is its own sum in a fixed order, so the threads do not change the bits.
-  const AxisTaps tx = lanczos3_taps(in.width, W), ty = lanczos3_taps(in.height, H);
-  std::vector<float> rows(size_t(in.height) * W * C);
-#pragma omp parallel for schedule(static)
-  for (long j = 0; j < long(in.height); ++j)
-    for (uint32_t i = 0; i < W; ++i) {
-      const uint32_t* idx = &tx.index[size_t(i) * tx.count];
-      const double* wt = &tx.weight[size_t(i) * tx.count];
-      for (uint32_t c = 0; c < C; ++c) {
-        double acc = 0;
-        for (uint32_t k = 0; k < tx.count; ++k) acc += wt[k] * src[(size_t(j) * in.width + idx[k]) * C + c];
-        rows[(size_t(j) * W + i) * C + c] = float(acc);
-      }
-    }
-  Image out;
-  out.width = W, out.height = H, out.channels = C, out.bits = in.bits;
-  out.pixels.resize(size_t(W) * H * C);
-#pragma omp parallel for schedule(static)
-  for (long j = 0; j < long(H); ++j) {
-    const uint32_t* idx = &ty.index[size_t(j) * ty.count];
-    const double* wt = &ty.weight[size_t(j) * ty.count];
-    for (uint32_t i = 0; i < W; ++i)
-      for (uint32_t c = 0; c < C; ++c) {
-        double acc = 0;
-        for (uint32_t k = 0; k < ty.count; ++k) acc += wt[k] * rows[(size_t(idx[k]) * W + i) * C + c];
-        out.pixels[(size_t(j) * W + i) * C + c] = float(acc);
-      }
-  }
+  Image out = separable<float>(src, in.width, in.height, C, W, H, lanczos3_taps(in.width, W), lanczos3_taps(in.height, H),
+                               in.bits);
   for (size_t k = 0; k < out.pixels.size(); ++k) {
     float v = std::clamp(out.pixels[k], 0.0f, 1.0f);  // Lanczos rings past the range at edges
     if (linear_light && is_colour(uint32_t(k % C), C)) v = atlas::linear_to_srgb(v);
