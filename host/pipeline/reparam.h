@@ -66,9 +66,10 @@ struct ReparamOptions {
   // Charts that keep their shape keep their texels: copied from the source resized to the
   // layout's scale (Lanczos-3), whole-texel placements (atlas/place_texels.h).
   bool exact_texels = true;
-  // When not empty (bench quality): the kept layout is also built at each of these costs
-  // (its shapes as they are, only the budget changes) and scored as written: the report's
-  // `curve` [{c_r, q}], reparam's own q-c curve.
+  // When not empty (bench quality, demo): reparam's own q-c curve, the report's `curve`
+  // [{c_r, q, layout}]: at each of these costs the better of the kept plan and the best
+  // other one, each at both gutters, built at that budget (the triangle stage's targets
+  // kept) and scored as written.
   std::vector<double> curve_costs;
   // The views candidates, the guard, --max-gmsd and the curve are scored with: eval's
   // resolution (0: auto) and texture filter (host/eval/eval.h).
@@ -251,9 +252,15 @@ struct ReparamResult {
     eval::Shading shading = eval::Shading::Unlit;
   };
   std::optional<Scoring> scoring;
-  // With ReparamOptions::curve_costs: the kept layout built and written at each cost,
-  // scored as written: (c_r, q) by the costs' order.
-  std::optional<std::vector<std::pair<double, double>>> curve;
+  // With ReparamOptions::curve_costs: at each cost (by their order) the plan that scored
+  // best there as written, its c_r and q.
+  struct CurvePoint {
+    double c_r = 0, q = 0;
+    std::string layout;
+  };
+  std::optional<std::vector<CurvePoint>> curve;
+  // The curve as (c_r, q) points (eval::pixel_ratio_at_equal_q); empty without one.
+  std::vector<std::pair<double, double>> curve_cost_q() const;
   std::optional<MaxGmsd> max_gmsd;
   // Every re-baked texture's costs, before and after, and the bytes the input resized to
   // the same size would take (texture_costs.h).

@@ -107,6 +107,13 @@ bool ReparamResult::capped_at_source_density() const {
   return capped;
 }
 
+std::vector<std::pair<double, double>> ReparamResult::curve_cost_q() const {
+  std::vector<std::pair<double, double>> points;
+  if (curve)
+    for (const CurvePoint& p : *curve) points.push_back({p.c_r, p.q});
+  return points;
+}
+
 json ReparamResult::to_json() const {
   json report;
   report["device"] = device.name;
@@ -120,7 +127,7 @@ json ReparamResult::to_json() const {
                          {"shading", eval::to_string(scoring->shading)}};
   if (curve) {
     report["curve"] = json::array();
-    for (const auto& [c_r, q] : *curve) report["curve"].push_back({{"c_r", c_r}, {"q", q}});
+    for (const CurvePoint& p : *curve) report["curve"].push_back({{"c_r", p.c_r}, {"q", p.q}, {"layout", p.layout}});
   }
   if (max_gmsd)
     report["max_gmsd"] = {{"bound", max_gmsd->bound},

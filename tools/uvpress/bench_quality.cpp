@@ -83,7 +83,7 @@ void add_bench_quality(CLI::App& bench, Globals& g) {
         line["q_resize"] = r.guard.ran ? nlohmann::ordered_json(r.guard.q_resize) : nlohmann::ordered_json(nullptr);
         // reparam's guard and curve scored with this shading (its --score-shading).
         line["score_shading"] = r.scoring ? eval::to_string(r.scoring->shading) : "";
-        const std::vector<std::pair<double, double>> curve = r.curve ? *r.curve : std::vector<std::pair<double, double>>();
+        const std::vector<std::pair<double, double>> curve = r.curve_cost_q();
         std::string why;
         if (r.chosen == "untouched") {
           line["ratio_vs_resize"] = nullptr, line["ratio_vs_isometric"] = nullptr;

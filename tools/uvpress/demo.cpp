@@ -84,7 +84,7 @@ void add_demo(CLI::App& app, Globals& g) {
       size_t verdict_ties = 0, verdict_points = 0;
       if (report.curve) {
         const double floor = evaluation.noise_floor();
-        const auto sv = eval::pixel_ratio_at_equal_q(*report.curve, evaluation.layouts[0].grid_q(), floor);
+        const auto sv = eval::pixel_ratio_at_equal_q(report.curve_cost_q(), evaluation.layouts[0].grid_q(), floor);
         verdict_ties = sv.ties, verdict_points = sv.points;
         if (sv.points && sv.ties == sv.points) {
           verdict = sv.ratio;
