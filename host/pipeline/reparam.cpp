@@ -159,10 +159,13 @@ struct Prepared {
   std::vector<std::vector<uint32_t>> welded_of_vertex;  // per UV set: primitive vertex -> welded UV id
   std::vector<size_t> welded_count;
   std::vector<std::vector<perceptual::TriangleResult>> results;  // per UV set (empty without optimize)
-  // The equal-slope allocation at the requested cost (perceptual/rate_allocation.h): per UV
-  // set and triangle its isotropic scale (empty: not computed), and its figures.
-  std::vector<std::vector<double>> equal_slope;
-  EqualSlopeReport equal_slope_report;
+  // The equal-slope allocation (perceptual/rate_allocation.h): each allocated triangle's
+  // loss at kSlopeScales, texel area and surface weight, measured once (empty: not
+  // computed), and where it sits (UV set, triangle); equal_slope_at() allocates them at a
+  // budget.
+  perceptual::LossCurves slope_loss;
+  std::vector<double> slope_area, slope_weight;
+  std::vector<std::pair<size_t, uint32_t>> slope_where;
   double old_used = 0;  // eq. 20: source texels under the input's charts
   size_t rigid = 0;
   TriangleCounts tri;
@@ -177,7 +180,7 @@ struct Prepared {
   // equal-slope allocation over whole units (measure_unit_losses; empty: not measured).
   perceptual::LossCurves unit_loss;
   std::vector<double> unit_area, unit_weight;
-  double unit_cost = 1;  // the requested cost as a share of the source's texels (rate control's)
+  double requested_share = 1;  // the requested cost as a share of the source's texels (rate control's; both allocations')
   // ReparamOptions::isometric: the charts flattened once (pipeline/isometric_charts.h), and
   // the packing units with each flattened chart on its own (the others keep their grouping).
   IsometricCharts isometric;
@@ -272,6 +275,10 @@ double surface_area(const io::Primitive& prim, uint32_t t) {
 }
 
 // The shrinks at which the equal-slope allocations measure each triangle's loss.
+// The budget share below which the allocating plans are also built with their allocation
+// made at this share (choose_layout).
+constexpr double kHalfShare = 0.5;
+
 const std::vector<double> kSlopeScales = {0.125, 0.25, 0.35, 0.5, 0.6, 0.707, 0.85, 1.0};
 
 // Each packing unit's loss curve for the equal-slope allocation over whole units
@@ -359,6 +366,9 @@ struct Candidate {
   bool isometric = false;
   // Charts unreshaped, each packing unit at its own uniform scale (unit_scales_filling).
   bool unit_scale = false;
+  // The budget share the equal-slope and unit-scale allocations are made at (0: the
+  // requested cost's, Prepared::requested_share); the packer scales the result into the budget.
+  double allocation_share = 0;
 };
 
 // What one candidate came to, in the output file it was written into.
@@ -406,6 +416,25 @@ double smallest_stretch(const double* a, const double* b, const double* c, const
   return std::sqrt(std::max(0.0, 0.5 * (fro - std::sqrt(std::max(0.0, fro * fro - 4 * dm * dm)))));
 }
 
+// Per UV set and triangle, the equal-slope allocation's isotropic scale at a budget of
+// `share` of the source's texels under the allocated triangles (1 where none was allocated),
+// and its figures. The losses were measured once (measure_slope_losses); the allocation is a
+// one-multiplier search, cheap enough to redo for each candidate.
+struct EqualSlope {
+  std::vector<std::vector<double>> scale;
+  EqualSlopeReport report;
+};
+EqualSlope equal_slope_at(const Prepared& P, double share) {
+  const perceptual::RateAllocation alloc = perceptual::allocate_by_equal_slope(P.slope_loss, P.slope_area, P.slope_weight, share);
+  EqualSlope e;
+  e.scale.resize(P.results.size());
+  for (size_t si = 0; si < P.results.size(); ++si) e.scale[si].assign(P.results[si].size(), 1.0);
+  for (size_t k = 0; k < P.slope_where.size(); ++k) e.scale[P.slope_where[k].first][P.slope_where[k].second] = alloc.scale[k];
+  e.report = {share, alloc.spent, alloc.multiplier,
+              {quantile(alloc.scale, 0.25), quantile(alloc.scale, 0.5), quantile(alloc.scale, 0.75)}};
+  return e;
+}
+
 // The packing budget of a candidate: --cost of the source's image texels (or --size), the
 // gutter as asked or mip-safe for the image the budget buys (its texels are known before
 // packing: --cost of the source's, --size N at the source's aspect; --max-gmsd bakes at the
@@ -427,7 +456,7 @@ atlas::BudgetOptions budget_options(const ReparamOptions& o, const Candidate& ca
 }
 
 // Uniform scales per packing unit (Prepared::unit_loss), relative to the largest: the
-// equal-slope allocation at the requested cost (Prepared::unit_cost), which the packer
+// equal-slope allocation at the requested cost (Prepared::requested_share), which the packer
 // scales whole to the budget. Where that leaves budget unspent (the largest unit already at
 // the source density: the packer stops there), the allocation's share c is raised by
 // bisection until the units just fill the budget, so the smaller ones get the texels back.
@@ -463,7 +492,7 @@ UnitScales unit_scales_filling(const Prepared& P, const io::Asset& asset, const 
     const atlas::AtlasChoice choice = atlas::choose_atlas(shapes, P.driver.width, P.driver.height, P.old_used, budget);
     return choice.packing.ok && choice.packing.scale >= 1 - 1e-3;
   };
-  double lo = P.unit_cost, hi = 1;
+  double lo = cand.allocation_share > 0 ? cand.allocation_share : P.requested_share, hi = 1;
   UnitScales best{scales_at(lo), lo};
   if (!spare(best.scale)) return best;  // the packer scales it down whole
   if (std::vector<double> all = scales_at(hi); spare(all)) return {all, hi};  // the whole source fits: the repack
@@ -499,8 +528,10 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
     const double W = P.W, H = P.H;
     LayoutReport& lr = out.layouts[li];
     size_t layout_flips = 0, mesh_failed = 0, overlap_fallback_pairs = 0, outline_kept = 0, outline_failed = 0;
-    const bool slope = cand.equal_slope && !P.equal_slope.empty();
-    if (slope) lr.equal_slope = P.equal_slope_report;
+    const bool slope = cand.equal_slope && !P.slope_where.empty();
+    EqualSlope equal_slope;
+    if (slope) equal_slope = equal_slope_at(P, cand.allocation_share > 0 ? cand.allocation_share : P.requested_share),
+               lr.equal_slope = equal_slope.report;
     UnitScales unit_scales;
     if (cand.unit_scale && !P.unit_loss.loss.empty()) {
       unit_scales = unit_scales_filling(P, asset, L, o, cand);
@@ -553,7 +584,7 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
       for (uint32_t t : ch.triangles) {
         const perceptual::TriangleResult& r = P.results[ch.uv_set][t];
         if (slope) {
-          const double k = P.equal_slope[ch.uv_set][t];
+          const double k = equal_slope.scale[ch.uv_set][t];
           if (cand.floor > 0) {
             // The triangle stage's stretch shape (floored, unrotated) at the allocation's area.
             perceptual::TriangleTarget shaped = target_of(r, cand.floor, false);
@@ -1035,9 +1066,9 @@ void run_triangle_stage(Run& run, size_t li, const Layout& L, Prepared& P, const
   }
 }
 
-// The equal-slope allocation over the layout's optimized triangles (a candidate's
-// targets): each triangle's loss at a few uniform shrinks, measured on its own views.
-void allocate_equal_slope(Run& run, const Layout& L, Prepared& P, const std::vector<float>& luminance,
+// What the equal-slope allocation (equal_slope_at) needs of the layout's optimized
+// triangles: each triangle's loss at a few uniform shrinks, measured on its own views.
+void measure_slope_losses(Run& run, const Layout& L, Prepared& P, const std::vector<float>& luminance,
                           double rate_scale) {
   const ReparamOptions& o = run.o;
   const io::Asset& asset = run.asset;
@@ -1072,13 +1103,8 @@ void allocate_equal_slope(Run& run, const Layout& L, Prepared& P, const std::vec
           curves.loss.push_back(curves.scales[j] < 1 ? g[j][k] : r.identity_gmsd);
       }
     }
-    const double cost = rate_scale * rate_scale;
-    const perceptual::RateAllocation alloc = perceptual::allocate_by_equal_slope(curves, area, weight, cost);
-    P.equal_slope.resize(L.uv_sets.size());
-    for (size_t si = 0; si < L.uv_sets.size(); ++si) P.equal_slope[si].assign(P.results[si].size(), 1.0);
-    for (size_t k = 0; k < where.size(); ++k) P.equal_slope[where[k].first][where[k].second] = alloc.scale[k];
-    P.equal_slope_report = {cost, alloc.spent, alloc.multiplier,
-                            {quantile(alloc.scale, 0.25), quantile(alloc.scale, 0.5), quantile(alloc.scale, 0.75)}};
+    P.slope_loss = std::move(curves), P.slope_area = std::move(area), P.slope_weight = std::move(weight);
+    P.slope_where = std::move(where);
     run.t_triangle += t0.seconds();
   }
 }
@@ -1132,12 +1158,12 @@ void prepare_layout(Run& run, size_t li) {
   }
 
   run_triangle_stage(run, li, L, P, luminance, rate_scale);
-  allocate_equal_slope(run, L, P, luminance, rate_scale);
+  measure_slope_losses(run, L, P, luminance, rate_scale);
   // Uniform scales per packing unit (the `unit-scale` candidate).
   if (o.optimize && o.candidates && rate_scale > 0) {
     Stopwatch t0;
     measure_unit_losses(asset, L, P, run.engine, luminance, o.triangle);
-    P.unit_cost = rate_scale * rate_scale;
+    P.requested_share = rate_scale * rate_scale;
     run.t_triangle += t0.seconds();
   }
   run.optimized += P.tri.optimized, run.infeasible += P.tri.optimized - P.tri.feasible;
@@ -1174,7 +1200,7 @@ std::vector<Candidate> plan_candidates(const Run& run) {
     // 0.00164 (shaped; best other 0.00203), the truck 0.00657 (outline, least squares;
     // best other 0.00691).
     bool equal_slope = false;
-    for (const Prepared& P : prepared) equal_slope |= !P.equal_slope.empty();
+    for (const Prepared& P : prepared) equal_slope |= !P.slope_where.empty();
     if (equal_slope) {
       plans.push_back({"equal-slope", true, 0.0, Candidate::Bake::Lanczos, false, true, false, true});
       plans.push_back({"equal-slope-outline", true, 0.0, Candidate::Bake::Lanczos, false, true, true, true});
@@ -1185,7 +1211,7 @@ std::vector<Candidate> plan_candidates(const Run& run) {
   // The input's charts unreshaped, each packing unit at its own scale: where the signal
   // sits in a few units (Duck's eye), the smooth ones give their texels to it.
   bool unit_scales = false;
-  for (const Prepared& P : prepared) unit_scales |= unit_scales_differ(P, P.unit_cost);
+  for (const Prepared& P : prepared) unit_scales |= unit_scales_differ(P, P.requested_share);
   if (o.max_gmsd <= 0 && o.candidates && unit_scales) {
     Candidate c{"unit-scale", false, 1.0};
     c.unit_scale = true;
@@ -1273,6 +1299,26 @@ void choose_layout(Run& run, const std::vector<Candidate>& plans) {
   if (!run.prepared.empty() && run.chosen.name.empty())
     throw InputError(run.file.path, "every layout built has triangles overlapping in UV that did not in the input "
                                     "(see overlaps_new); nothing written");
+  // Below half the texels, the two best base plans that allocate texels (equal-slope,
+  // unit-scale) once more with their allocation made for half the texels and scaled into
+  // the budget whole: the allocation made at a small budget starves the middle triangles for
+  // the detailed ones, which the views then see through coarse mip levels anyway. Measured
+  // (the half's shapes scaled down): the demo's equal-slope-outline at a fifth of its texels
+  // scores q 0.0467 against 0.0589 allocated there, at three tenths 0.0311 against 0.0361
+  // (at four tenths 0.0238 against 0.0225: kept only when it scores better); Duck's
+  // unit-scale at a tenth 0.00107 against 0.00131.
+  if (scorer && o.max_gmsd <= 0 && o.candidates) {
+    bool below_half = !run.prepared.empty();
+    for (const Prepared& P : run.prepared) below_half &= P.requested_share < kHalfShare;
+    std::vector<std::pair<double, size_t>> best = base_scores;
+    std::sort(best.begin(), best.end());
+    for (size_t k = 0; below_half && k < best.size() && k < 2; ++k) {
+      Candidate c = plans[best[k].second];
+      if (!c.equal_slope && !c.unit_scale) continue;
+      c.allocation_share = kHalfShare, c.name += "+half-allocation";
+      consider(c);
+    }
+  }
   const std::string kept_base = chosen_plan.name;  // the plan the variants below start from
   // The kept layout once more with the least-squares re-bake (the texels whose bilinear
   // reconstruction is closest to the source over the surface), with the unreshaped charts'

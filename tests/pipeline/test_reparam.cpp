@@ -488,3 +488,40 @@ TEST_CASE("reparam's own curve chooses plan and gutter at each cost: Duck at a t
   CHECK(floor > 0);
   CHECK(tenth.q < q_resize - floor);
 }
+
+TEST_CASE("reparam on Duck at a tenth of the texels: the allocation made for half the texels, scaled down, wins",
+          "[pipeline][reparam][shared][unit-scale]") {
+  // Below half the texels the allocating plans are also built with their allocation made
+  // for half the texels and scaled into the budget (choose_layout). On Duck at a tenth the
+  // unit-scale allocation made there gives the eye's units the source density and starves
+  // the rest (q 0.00134); the half's allocation scaled down scores 0.00107, and the written
+  // file beats the resize (0.00156) by more than eval's noise floor.
+  if (!test::shared_dir()) UVPRESS_SKIP("../shared is absent");
+  auto engine = engine::make_cpu_engine({});
+  const io::GltfFile in = shared_duck();
+  io::GltfFile out = in;
+  pipeline::ReparamOptions o;
+  o.cost = 0.1;
+  const pipeline::ReparamResult result = pipeline::reparam(out, *engine, o);
+  const auto report = result.to_json();
+  INFO(report["candidates"].dump());
+  const double q_here = candidate_score(report, "unit-scale").first;
+  const auto [q_half, cost_half] = candidate_score(report, "unit-scale+half-allocation");
+  REQUIRE(q_here > 0);
+  REQUIRE(q_half > 0);
+  CHECK(cost_half == Approx(0.1).margin(0.002));
+  eval::EvalOptions eo;
+  eo.artifacts = false;
+  eo.cost_grid = {0.1};
+  const double floor = eval::evaluate(in, {}, *engine, eo).noise_floor();
+  INFO("q unit-scale " << q_here << ", with the half's allocation " << q_half << ", noise floor " << floor);
+  CHECK(floor > 0);
+  CHECK(q_half < q_here - floor);
+  CHECK(report["chosen"] == "reparam");
+  CHECK(report["layout"].get<std::string>().rfind("unit-scale+half-allocation", 0) == 0);
+  REQUIRE(result.guard.ran);
+  CHECK(result.guard.q_reparam < result.guard.q_resize - floor);
+  REQUIRE(result.layouts.size() == 1);
+  REQUIRE(result.layouts[0].unit_scale);
+  CHECK(result.layouts[0].unit_scale->cost == Approx(0.5));  // the allocation's share
+}
