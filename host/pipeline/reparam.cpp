@@ -274,11 +274,11 @@ double surface_area(const io::Primitive& prim, uint32_t t) {
   return 0.5 * std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
 }
 
-// The shrinks at which the equal-slope allocations measure each triangle's loss.
 // The budget share below which the allocating plans are also built with their allocation
 // made at this share (choose_layout).
 constexpr double kHalfShare = 0.5;
 
+// The shrinks at which the equal-slope allocations measure each triangle's loss.
 const std::vector<double> kSlopeScales = {0.125, 0.25, 0.35, 0.5, 0.6, 0.707, 0.85, 1.0};
 
 // Each packing unit's loss curve for the equal-slope allocation over whole units
@@ -456,10 +456,11 @@ atlas::BudgetOptions budget_options(const ReparamOptions& o, const Candidate& ca
 }
 
 // Uniform scales per packing unit (Prepared::unit_loss), relative to the largest: the
-// equal-slope allocation at the requested cost (Prepared::requested_share), which the packer
-// scales whole to the budget. Where that leaves budget unspent (the largest unit already at
-// the source density: the packer stops there), the allocation's share c is raised by
-// bisection until the units just fill the budget, so the smaller ones get the texels back.
+// equal-slope allocation at the requested cost (Prepared::requested_share) or at the
+// candidate's allocation_share, which the packer scales whole to the budget. Where that
+// leaves budget unspent (the largest unit already at the source density: the packer stops
+// there), the allocation's share c is raised by bisection until the units just fill the
+// budget, so the smaller ones get the texels back.
 // A curve point below the requested cost keeps the requested cost's shape, scaled down: the
 // layout reparam chose, at another budget. The probe packing ignores whole-texel snapping
 // and the copies' edge ring, which realize() adds; 10 steps of bisection.
@@ -1376,10 +1377,11 @@ void choose_layout(Run& run, const std::vector<Candidate>& plans) {
 // kept one and the two best base plans, at both gutters), each with its shapes as they
 // are, built into that budget and scored as written. Which plan and which gutter serve a
 // budget best depends on the budget: the plan kept at half of Duck's texels
-// (`repack+wide-gutter`) scores q 0.00179 at a tenth, `unit-scale+wide-gutter` 0.00131, the
-// resize 0.00155. The shapes stay those of the requested cost: the equal-slope allocation
-// made afresh at each budget serves the demo worse below half its texels (q 0.0589
-// against 0.0467 at a fifth) than the half's layout scaled down.
+// (`repack+wide-gutter`) scores q 0.00179 at a tenth, `unit-scale+least-squares` 0.00107,
+// the resize 0.00155. The shapes stay those of the requested cost: the equal-slope
+// allocation made afresh at each budget serves the demo worse below half its texels (q
+// 0.0589 against 0.0467 at a fifth) than the half's layout scaled down (the
+// `+half-allocation` plans reparam builds below half the texels).
 void build_curve(Run& run) {
   const ReparamOptions& o = run.o;
   json ignored = json::array();  // the curve's layouts warn as the kept one did

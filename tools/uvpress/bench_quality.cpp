@@ -1,8 +1,9 @@
 // uvpress bench quality: does reparam beat the resize a user would do? For the demo asset
 // and the shared assets (and --asset FILE): reparam at --cost, then eval of its kept layout
 // against the input (the input curve is the Lanczos-3 resize) and the isometric layout.
-// One JSON line per asset: the pixel ratios at equal q from the layout's own curve
-// (whatever the guard wrote), q at the output cost for the written file and for the
+// One JSON line per asset: the pixel ratios at equal q from reparam's own curve (whatever
+// the guard wrote; at each cost the best of the layouts reparam chose among, built into
+// that budget: ReparamOptions::curve_costs), q at the output cost for the written file and for the
 // resize, what the guard chose, and seconds. q is the lit q for assets with normal maps
 // (eval's --shading auto, the default of --shading and --score-shading): the line says
 // which (`shading`: eval's, `score_shading`: reparam's guard and curve).
