@@ -957,8 +957,9 @@ struct Run {
   std::string score_failure;                      // why eval cannot score the asset
   Realized chosen;                                // the kept candidate, built into `file`
   Candidate chosen_plan;
-  // The plans build_curve() chooses among at each cost: the kept one and the two best base
-  // plans, at both gutters when the gutter is automatic (choose_layout).
+  // The plans build_curve() chooses among at each cost: the kept one before the wider gutter
+  // and the best base plan of another name, each at both gutters when the gutter is
+  // automatic (choose_layout).
   std::vector<Candidate> curve_plans;
   ReparamResult result;
 };
@@ -1345,36 +1346,26 @@ void choose_layout(Run& run, const std::vector<Candidate>& plans) {
   // the default gutter need not score alike at the wider one (Duck: `unit-scale` and
   // `repack` 0.000707 and 0.000779 at 8 texels, 0.000710 and 0.000675 at 16).
   const bool widen = scorer && o.max_gmsd <= 0 && o.gutter == ReparamOptions::kAutoGutter && o.candidates;
+  std::vector<Candidate> pair = {chosen_plan};
   std::sort(base_scores.begin(), base_scores.end());
-  // The curve's plans (before the variant below can change the kept one): the kept layout
-  // and the two best base plans, each at both gutters.
-  std::vector<Candidate> finalists = {chosen_plan};
-  for (size_t k = 0; k < base_scores.size() && k < 2; ++k) finalists.push_back(plans[base_scores[k].second]);
-  for (const Candidate& f : finalists)
-    for (bool w : {false, true}) {
-      if (w && !widen) break;
-      Candidate c = f;
-      if (w) c.name += "+wide-gutter", c.wide_gutter = true;
-      const auto same = [&c](const Candidate& k) { return k.name == c.name; };
-      if (std::none_of(run.curve_plans.begin(), run.curve_plans.end(), same)) run.curve_plans.push_back(c);
+  for (const auto& [q, i] : base_scores)
+    if (plans[i].name != kept_base) {
+      pair.push_back(plans[i]);
+      break;
     }
-  if (widen) {
-    std::vector<Candidate> wide = {chosen_plan};
-    for (const auto& [q, i] : base_scores)
-      if (plans[i].name != kept_base) {
-        wide.push_back(plans[i]);
-        break;
-      }
-    for (Candidate c : wide) {
-      c.name += "+wide-gutter", c.wide_gutter = true;
-      consider(c);
-    }
+  // The curve's plans (build_curve): this pair at both gutters.
+  run.curve_plans = pair;
+  for (Candidate c : pair) {
+    if (!widen) break;
+    c.name += "+wide-gutter", c.wide_gutter = true;
+    consider(c);
+    run.curve_plans.push_back(c);
   }
 }
 
 // Reparam's own q-c curve (bench quality, demo): at each of o.curve_costs the best on
 // screen of the layouts reparam chose among at the requested cost (Run::curve_plans: the
-// kept one and the two best base plans, at both gutters), each with its shapes as they
+// kept one and the best other, at both gutters), each with its shapes as they
 // are, built into that budget and scored as written. Which plan and which gutter serve a
 // budget best depends on the budget: the plan kept at half of Duck's texels
 // (`repack+wide-gutter`) scores q 0.00179 at a tenth, `unit-scale+least-squares` 0.00107,

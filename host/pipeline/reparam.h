@@ -67,8 +67,8 @@ struct ReparamOptions {
   // layout's scale (Lanczos-3), whole-texel placements (atlas/place_texels.h).
   bool exact_texels = true;
   // When not empty (bench quality, demo): reparam's own q-c curve, the report's `curve`
-  // [{c_r, q, layout}]: at each of these costs the best of the kept plan and the two best
-  // base plans, each at both gutters, built into that budget with the shapes made for the
+  // [{c_r, q, layout}]: at each of these costs the best of the kept plan and the best other
+  // base plan, each at both gutters, built into that budget with the shapes made for the
   // requested cost, and scored as written.
   std::vector<double> curve_costs;
   // The views candidates, the guard, --max-gmsd and the curve are scored with: eval's
