@@ -77,6 +77,28 @@ std::pair<double, double> candidate_score(const nlohmann::ordered_json& report, 
   return {-1.0, 0.0};
 }
 
+// reparam of the shared Duck with `o`: the input, the file written and the result.
+struct DuckRun {
+  io::GltfFile in, out;
+  pipeline::ReparamResult result;
+  nlohmann::ordered_json report;
+};
+DuckRun reparam_duck(engine::Engine& engine, const pipeline::ReparamOptions& o) {
+  DuckRun r{shared_duck(), {}, {}, {}};
+  r.out = r.in;
+  r.result = pipeline::reparam(r.out, engine, o);
+  r.report = r.result.to_json();
+  return r;
+}
+
+// eval's noise floor for `in` (its input curve at `cost`).
+double noise_floor_at(const io::GltfFile& in, engine::Engine& engine, double cost) {
+  eval::EvalOptions eo;
+  eo.artifacts = false;
+  eo.cost_grid = {cost};
+  return eval::evaluate(in, {}, engine, eo).noise_floor();
+}
+
 }  // namespace
 
 TEST_CASE("reparam without optimization at the same cost: the textures look the same through the new UVs",
@@ -383,12 +405,11 @@ TEST_CASE("reparam on Duck at half the texels: gutters a mip level cleaner win, 
   // this checks the choice and the written score, not a visible win.
   if (!test::shared_dir()) UVPRESS_SKIP("../shared is absent");
   auto engine = engine::make_cpu_engine({});
-  const io::GltfFile in = shared_duck();
-  io::GltfFile out = in;
   pipeline::ReparamOptions o;
   o.cost = 0.5;
-  const pipeline::ReparamResult result = pipeline::reparam(out, *engine, o);
-  const auto report = result.to_json();
+  const DuckRun run = reparam_duck(*engine, o);
+  const pipeline::ReparamResult& result = run.result;
+  const auto& report = run.report;
   INFO(report["candidates"].dump());
   REQUIRE(report["guard"].is_object());
   const double q_default = candidate_score(report, "repack").first;
@@ -402,7 +423,7 @@ TEST_CASE("reparam on Duck at half the texels: gutters a mip level cleaner win, 
   CHECK(result.layouts[0].gutter == 16);
   eval::EvalOptions eo;
   eo.artifacts = false;
-  const double q_written = eval::score_as_written(in, out, *engine, eo).q;
+  const double q_written = eval::score_as_written(run.in, run.out, *engine, eo).q;
   CHECK(q_written == Approx(q_wide).epsilon(1e-9));
   CHECK(q_written < report["guard"]["q_resize"].get<double>());
 }
@@ -417,22 +438,18 @@ TEST_CASE("reparam on Duck: units that share texels trade density as wholes and 
   // raised until the units fill it).
   if (!test::shared_dir()) UVPRESS_SKIP("../shared is absent");
   auto engine = engine::make_cpu_engine({});
-  const io::GltfFile in = shared_duck();
-  io::GltfFile out = in;
   pipeline::ReparamOptions o;
   o.cost = 0.25;
   o.guard = false;
-  const pipeline::ReparamResult result = pipeline::reparam(out, *engine, o);
-  const auto report = result.to_json();
+  const DuckRun run = reparam_duck(*engine, o);
+  const pipeline::ReparamResult& result = run.result;
+  const auto& report = run.report;
   INFO(report["candidates"].dump());
   const double q_repack = candidate_score(report, "repack").first;
   const auto [q_units, cost_units] = candidate_score(report, "unit-scale");
   REQUIRE(q_repack > 0);
   REQUIRE(q_units > 0);
-  eval::EvalOptions eo;
-  eo.artifacts = false;
-  eo.cost_grid = {0.25};
-  const double floor = eval::evaluate(in, {}, *engine, eo).noise_floor();
+  const double floor = noise_floor_at(run.in, *engine, 0.25);
   INFO("q unit-scale " << q_units << ", repack " << q_repack << ", noise floor " << floor);
   CHECK(floor > 0);
   CHECK(q_units < q_repack - floor);
@@ -462,14 +479,12 @@ TEST_CASE("reparam's own curve chooses plan and gutter at each cost: Duck at a t
   // noise floor, and it is never worse at the requested cost than the kept layout itself.
   if (!test::shared_dir()) UVPRESS_SKIP("../shared is absent");
   auto engine = engine::make_cpu_engine({});
-  const io::GltfFile in = shared_duck();
-  io::GltfFile out = in;
   pipeline::ReparamOptions o;
   o.cost = 0.5;
   o.curve_costs = {0.1, 0.5};
-  const pipeline::ReparamResult result = pipeline::reparam(out, *engine, o);
-  const auto report = result.to_json();
-  INFO(report["candidates"].dump() << "\n" << report["curve"].dump());
+  const DuckRun run = reparam_duck(*engine, o);
+  const pipeline::ReparamResult& result = run.result;
+  INFO(run.report["candidates"].dump() << "\n" << run.report["curve"].dump());
   REQUIRE(result.curve);
   REQUIRE(result.curve->size() == 2);
   const auto& tenth = (*result.curve)[0];
@@ -482,7 +497,7 @@ TEST_CASE("reparam's own curve chooses plan and gutter at each cost: Duck at a t
   eval::EvalOptions eo;
   eo.artifacts = false;
   eo.cost_grid = {0.1};
-  const eval::EvalResult resize = eval::evaluate(in, {}, *engine, eo);
+  const eval::EvalResult resize = eval::evaluate(run.in, {}, *engine, eo);
   const double floor = resize.noise_floor(), q_resize = resize.layouts[0].curve[0].q;
   INFO("curve at 0.1: q " << tenth.q << " (" << tenth.layout << "), resize " << q_resize << ", noise floor " << floor);
   CHECK(floor > 0);
@@ -498,22 +513,18 @@ TEST_CASE("reparam on Duck at a tenth of the texels: the allocation made for hal
   // file beats the resize (0.00156) by more than eval's noise floor.
   if (!test::shared_dir()) UVPRESS_SKIP("../shared is absent");
   auto engine = engine::make_cpu_engine({});
-  const io::GltfFile in = shared_duck();
-  io::GltfFile out = in;
   pipeline::ReparamOptions o;
   o.cost = 0.1;
-  const pipeline::ReparamResult result = pipeline::reparam(out, *engine, o);
-  const auto report = result.to_json();
+  const DuckRun run = reparam_duck(*engine, o);
+  const pipeline::ReparamResult& result = run.result;
+  const auto& report = run.report;
   INFO(report["candidates"].dump());
   const double q_here = candidate_score(report, "unit-scale").first;
   const auto [q_half, cost_half] = candidate_score(report, "unit-scale+half-allocation");
   REQUIRE(q_here > 0);
   REQUIRE(q_half > 0);
   CHECK(cost_half == Approx(0.1).margin(0.002));
-  eval::EvalOptions eo;
-  eo.artifacts = false;
-  eo.cost_grid = {0.1};
-  const double floor = eval::evaluate(in, {}, *engine, eo).noise_floor();
+  const double floor = noise_floor_at(run.in, *engine, 0.1);
   INFO("q unit-scale " << q_here << ", with the half's allocation " << q_half << ", noise floor " << floor);
   CHECK(floor > 0);
   CHECK(q_half < q_here - floor);
