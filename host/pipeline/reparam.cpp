@@ -356,7 +356,7 @@ struct Candidate {
   bool rotate = true;          // follow the triangle stage's rotations (false: R-bar = I, stretches only)
   bool exact = true;           // unreshaped charts keep their texels (atlas/place_texels.h), else resampled
   bool outline = false;        // reshaped charts keep their input outline (perceptual/outline_fit.h)
-  // Targets J = s I from the equal-slope allocation (Prepared::equal_slope) instead of the
+  // Targets J = s I from the equal-slope allocation (equal_slope_at) instead of the
   // triangle stage's Jacobians (its weights are kept).
   bool equal_slope = false;
   // The automatic gutter one mip level cleaner (atlas::mip_safe_gutter down to a side of 32
@@ -1112,7 +1112,8 @@ void measure_slope_losses(Run& run, const Layout& L, Prepared& P, const std::vec
 }
 
 // Layout li: its charts, which of them may be reshaped, and the triangle stage's targets
-// (with rate control, the equal-slope allocation and the packing units' losses).
+// (with rate control, the losses the equal-slope allocations need, per triangle and per
+// packing unit).
 void prepare_layout(Run& run, size_t li) {
   const ReparamOptions& o = run.o;
   const io::Asset& asset = run.asset;
@@ -1301,17 +1302,17 @@ void choose_layout(Run& run, const std::vector<Candidate>& plans) {
   if (!run.prepared.empty() && run.chosen.name.empty())
     throw InputError(run.file.path, "every layout built has triangles overlapping in UV that did not in the input "
                                     "(see overlaps_new); nothing written");
-  // Below half the texels, the two best base plans that allocate texels (equal-slope,
-  // unit-scale) once more with their allocation made for half the texels and scaled into
+  // Below half the texels, those of the two best base plans that allocate texels
+  // (equal-slope, unit-scale) once more with their allocation made for half the texels and scaled into
   // the budget whole: the allocation made at a small budget starves the middle triangles for
   // the detailed ones, which the views then see through coarse mip levels anyway. Measured
   // (the half's shapes scaled down): the demo's equal-slope-outline at a fifth of its texels
   // scores q 0.0467 against 0.0589 allocated there, at three tenths 0.0311 against 0.0361
   // (at four tenths 0.0238 against 0.0225: kept only when it scores better); Duck's
-  // unit-scale at a tenth 0.00107 against 0.00131.
+  // unit-scale at a tenth 0.00107 against 0.00134.
   if (scorer && o.max_gmsd <= 0 && o.candidates) {
     bool below_half = !run.prepared.empty();
-    for (const Prepared& P : run.prepared) below_half &= P.requested_share < kHalfShare;
+    for (const Prepared& P : run.prepared) below_half &= P.requested_share < kHalfShare * (1 - 1e-9);
     std::vector<std::pair<double, size_t>> best = base_scores;
     std::sort(best.begin(), best.end());
     for (size_t k = 0; below_half && k < best.size() && k < 2; ++k) {

@@ -68,8 +68,9 @@ struct ReparamOptions {
   bool exact_texels = true;
   // When not empty (bench quality, demo): reparam's own q-c curve, the report's `curve`
   // [{c_r, q, layout}]: at each of these costs the best of the kept plan and the best other
-  // base plan, each at both gutters, built into that budget with the shapes made for the
-  // requested cost, and scored as written.
+  // base plan, each at both gutters when the gutter is automatic, built into that budget
+  // with the shapes made for the requested cost, and scored as written (a cost where every
+  // plan has new UV overlaps gets no point, with a warning).
   std::vector<double> curve_costs;
   // The views candidates, the guard, --max-gmsd and the curve are scored with: eval's
   // resolution (0: auto) and texture filter (host/eval/eval.h).
@@ -123,8 +124,9 @@ struct UvSetReport {
   int mesh = -1, primitive = -1, tex_coord = 0;
 };
 
-// The equal-slope allocation of a layout's optimized triangles at the requested cost
-// (report: layouts[].equal_slope; perceptual/rate_allocation.h).
+// The equal-slope allocation of a layout's optimized triangles at the requested cost, or at
+// half the texels for a `+half-allocation` candidate (report: layouts[].equal_slope;
+// perceptual/rate_allocation.h).
 struct EqualSlopeReport {
   double cost = 0;        // share of the source's texels under the triangles
   double spent = 0;       // sum a_t s_t^2 / sum a_t at the solution
@@ -252,8 +254,8 @@ struct ReparamResult {
     eval::Shading shading = eval::Shading::Unlit;
   };
   std::optional<Scoring> scoring;
-  // With ReparamOptions::curve_costs: at each cost (by their order) the plan that scored
-  // best there as written, its c_r and q.
+  // With ReparamOptions::curve_costs: at each cost (by their order; none where every plan
+  // had new UV overlaps) the plan that scored best there as written, its c_r and q.
   struct CurvePoint {
     double c_r = 0, q = 0;
     std::string layout;
@@ -295,7 +297,7 @@ struct ReparamResult {
 // prepared (charts, triangle stage), the candidate layouts built and scored, the best
 // kept, the guard against a plain resize, --max-gmsd, the costs, and what the replacement
 // left unused pruned. `layout_out`, when given, receives reparam's kept layout as built
-// even when the guard writes the resize (bench quality scores that layout's own curve).
+// even when the guard writes the resize (bench quality's re-baked ratios evaluate it).
 ReparamResult reparam(io::GltfFile& file, engine::Engine& engine, const ReparamOptions& options,
                       const Progress& progress = {}, io::GltfFile* layout_out = nullptr);
 

@@ -95,9 +95,10 @@ void add_bench_quality(CLI::App& bench, Globals& g) {
           eo.flatten = true;
           eo.artifacts = false;
           const eval::EvalResult ev = eval::evaluate(input, {{"reparam", &layout}}, *engine, eo);
-          // The ratios from reparam's own curve: its kept layout built and written at each
-          // cost, scored as written, against the input's resize curve and the isometric
-          // layout's curve. Beside them, eval's protocol (the layout's full texture re-baked
+          // The ratios from reparam's own curve: at each cost the best of its kept plan and
+          // the best other, built and scored as written (ReparamOptions::curve_costs),
+          // against the input's resize curve and the isometric layout's curve. Beside them,
+          // eval's protocol (the layout's full texture re-baked
           // from the input at c_r 1, then resized), which charges every layout a re-bake.
           line["ratio_vs_resize"] = nullptr, line["ratio_vs_isometric"] = nullptr;
           for (const auto& L : ev.layouts) {

@@ -78,8 +78,9 @@ void add_demo(CLI::App& app, Globals& g) {
                     report.chosen == "reparam" ? "reparam's layout" : "the plain resize (it looks better)",
                     gr.q_reparam, gr.q_resize);
       }
-      // Pixels at equal q: reparam's own curve (its layout written at each c_r, scored as
-      // written) against the input's resize curve, both at eval's resolution.
+      // Pixels at equal q: reparam's own curve (at each c_r the best of its kept plan and the
+      // best other, written and scored as written) against the input's resize curve, both at
+      // eval's resolution.
       nlohmann::ordered_json verdict = nullptr;
       size_t verdict_ties = 0, verdict_points = 0;
       if (report.curve) {
