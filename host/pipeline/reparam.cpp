@@ -1299,13 +1299,14 @@ void choose_layout(Run& run, const std::vector<Candidate>& plans) {
     const CandidateScore& scored = run.result.candidates.back();
     if (scored.q >= 0 && scored.overlaps_new == 0) base_scores.push_back({scored.q, i});
   }
+  std::sort(base_scores.begin(), base_scores.end());  // best first, for the variants below
   if (!run.prepared.empty() && run.chosen.name.empty())
     throw InputError(run.file.path, "every layout built has triangles overlapping in UV that did not in the input "
                                     "(see overlaps_new); nothing written");
   // Below half the texels, those of the two best base plans that allocate texels
-  // (equal-slope, unit-scale) once more with their allocation made for half the texels and scaled into
-  // the budget whole: the allocation made at a small budget starves the middle triangles for
-  // the detailed ones, which the views then see through coarse mip levels anyway. Measured
+  // (equal-slope, unit-scale) once more with their allocation made for half the texels and
+  // scaled into the budget whole: the allocation made at a small budget starves the middle
+  // triangles for the detailed ones, which the views then see through coarse mip levels anyway. Measured
   // (the half's shapes scaled down): the demo's equal-slope-outline at a fifth of its texels
   // scores q 0.0467 against 0.0589 allocated there, at three tenths 0.0311 against 0.0361
   // (at four tenths 0.0238 against 0.0225: kept only when it scores better); Duck's
@@ -1313,10 +1314,8 @@ void choose_layout(Run& run, const std::vector<Candidate>& plans) {
   if (scorer && o.max_gmsd <= 0 && o.candidates) {
     bool below_half = !run.prepared.empty();
     for (const Prepared& P : run.prepared) below_half &= P.requested_share < kHalfShare * (1 - 1e-9);
-    std::vector<std::pair<double, size_t>> best = base_scores;
-    std::sort(best.begin(), best.end());
-    for (size_t k = 0; below_half && k < best.size() && k < 2; ++k) {
-      Candidate c = plans[best[k].second];
+    for (size_t k = 0; below_half && k < base_scores.size() && k < 2; ++k) {
+      Candidate c = plans[base_scores[k].second];
       if (!c.equal_slope && !c.unit_scale) continue;
       c.allocation_share = kHalfShare, c.name += "+half-allocation";
       consider(c);
@@ -1348,7 +1347,6 @@ void choose_layout(Run& run, const std::vector<Candidate>& plans) {
   // `repack` 0.000707 and 0.000779 at 8 texels, 0.000710 and 0.000675 at 16).
   const bool widen = scorer && o.max_gmsd <= 0 && o.gutter == ReparamOptions::kAutoGutter && o.candidates;
   std::vector<Candidate> pair = {chosen_plan};
-  std::sort(base_scores.begin(), base_scores.end());
   for (const auto& [q, i] : base_scores)
     if (plans[i].name != kept_base) {
       pair.push_back(plans[i]);

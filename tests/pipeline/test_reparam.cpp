@@ -91,12 +91,12 @@ DuckRun reparam_duck(engine::Engine& engine, const pipeline::ReparamOptions& o) 
   return r;
 }
 
-// eval's noise floor for `in` (its input curve at `cost`).
-double noise_floor_at(const io::GltfFile& in, engine::Engine& engine, double cost) {
+// eval of `in` alone at `cost`: its resize there (layouts[0]) and its noise floor.
+eval::EvalResult input_at(const io::GltfFile& in, engine::Engine& engine, double cost) {
   eval::EvalOptions eo;
   eo.artifacts = false;
   eo.cost_grid = {cost};
-  return eval::evaluate(in, {}, engine, eo).noise_floor();
+  return eval::evaluate(in, {}, engine, eo);
 }
 
 }  // namespace
@@ -449,7 +449,7 @@ TEST_CASE("reparam on Duck: units that share texels trade density as wholes and 
   const auto [q_units, cost_units] = candidate_score(report, "unit-scale");
   REQUIRE(q_repack > 0);
   REQUIRE(q_units > 0);
-  const double floor = noise_floor_at(run.in, *engine, 0.25);
+  const double floor = input_at(run.in, *engine, 0.25).noise_floor();
   INFO("q unit-scale " << q_units << ", repack " << q_repack << ", noise floor " << floor);
   CHECK(floor > 0);
   CHECK(q_units < q_repack - floor);
@@ -494,10 +494,7 @@ TEST_CASE("reparam's own curve chooses plan and gutter at each cost: Duck at a t
   // The requested cost's point is at least as good as what reparam kept there.
   REQUIRE(result.guard.ran);
   CHECK(half.q <= result.guard.q_reparam + 1e-12);
-  eval::EvalOptions eo;
-  eo.artifacts = false;
-  eo.cost_grid = {0.1};
-  const eval::EvalResult resize = eval::evaluate(run.in, {}, *engine, eo);
+  const eval::EvalResult resize = input_at(run.in, *engine, 0.1);
   const double floor = resize.noise_floor(), q_resize = resize.layouts[0].curve[0].q;
   INFO("curve at 0.1: q " << tenth.q << " (" << tenth.layout << "), resize " << q_resize << ", noise floor " << floor);
   CHECK(floor > 0);
@@ -524,7 +521,7 @@ TEST_CASE("reparam on Duck at a tenth of the texels: the allocation made for hal
   REQUIRE(q_here > 0);
   REQUIRE(q_half > 0);
   CHECK(cost_half == Approx(0.1).margin(0.002));
-  const double floor = noise_floor_at(run.in, *engine, 0.1);
+  const double floor = input_at(run.in, *engine, 0.1).noise_floor();
   INFO("q unit-scale " << q_here << ", with the half's allocation " << q_half << ", noise floor " << floor);
   CHECK(floor > 0);
   CHECK(q_half < q_here - floor);
