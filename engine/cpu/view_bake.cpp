@@ -198,23 +198,26 @@ std::vector<float> bake_tile(const TileMap& m, const float* reference, uint32_t*
     for (; t < count; ++t) part[t % 8] += a[t] * b[t];
     return ((part[0] + part[1]) + (part[2] + part[3])) + ((part[4] + part[5]) + (part[6] + part[7]));
   };
-  // Jacobi-preconditioned conjugate gradients from x = 0.
-  const float bb = dot(r.data(), r.data(), n);
+  // Jacobi-preconditioned conjugate gradients from x = 0, until the last kBakeDelay terms
+  // alpha_i (r_i . z_i) of the A-norm error (views.h) sum to at most the render tolerance.
   uint32_t it = 0;
-  if (bb > 0.0f) {
-    for (uint32_t t = 0; t < n; ++t) z[t] = r[t] / diag[t];
+  for (uint32_t t = 0; t < n; ++t) z[t] = r[t] / diag[t];
+  float rz = dot(r.data(), z.data(), n);
+  if (rz > 0.0f) {
     for (uint32_t jj = 0; jj < h; ++jj) std::copy_n(&z[size_t(jj) * w], w, &pp[size_t(jj + 1) * W2 + 1]);
-    float rz = dot(r.data(), z.data(), n);
-    const float stop = kBakeTolerance * kBakeTolerance * bb;
+    const float stop = kBakeRenderTolerance * kBakeRenderTolerance * count;
+    float error[kBakeDelay] = {};
+    static_assert(kBakeDelay == 4, "the sum below is written out for a delay of 4");
     while (it < kBakeMaxIterations) {
-      ++it;
       apply(Ap);
       // p's interior, unpadded, for the dot product and the update of x.
       for (uint32_t jj = 0; jj < h; ++jj)
         std::copy_n(&pp[size_t(jj + 1) * W2 + 1], w, &z[size_t(jj) * w]);
       float alpha = rz / dot(z.data(), Ap.data(), n);
+      error[it % kBakeDelay] = alpha * rz;
+      ++it;
       for (uint32_t t = 0; t < n; ++t) x[t] += alpha * z[t], r[t] -= alpha * Ap[t];
-      if (dot(r.data(), r.data(), n) <= stop) break;
+      if (it >= kBakeDelay && (error[0] + error[1]) + (error[2] + error[3]) <= stop) break;
       for (uint32_t t = 0; t < n; ++t) z[t] = r[t] / diag[t];
       float rz_next = dot(r.data(), z.data(), n);
       float beta = rz_next / rz;

@@ -9,6 +9,7 @@
 #include "support.h"
 
 #include <Eigen/Dense>
+#include <Eigen/Sparse>
 
 #include <cmath>
 #include <random>
@@ -88,6 +89,55 @@ ViewSetDesc mesh_views(const GridMesh& m, const std::vector<float>& tex, uint32_
   return d;
 }
 
+// The bake's render at the mapped pixels, solved directly in double (an independent
+// reference for the CG bake): min_T |W T - ref|^2 + mu |L T|^2 with W the bilinear weights,
+// over the texels some pixel sees (a fixed-point weight^2 that rounds above 0); the others
+// stay at the mean reference (they cannot change the render).
+Eigen::VectorXd exact_bake_render(const cpu::TileMap& m, const float* reference) {
+  const int n = int(m.width * m.height), q = int(m.pixel.size()), w = int(m.width);
+  std::vector<Eigen::Triplet<double>> entries;
+  Eigen::VectorXd ref(q);
+  std::vector<int> seen(size_t(n), 0);
+  for (int k = 0; k < q; ++k) {
+    const double a = m.a[size_t(k)], b = m.b[size_t(k)], fa = a - std::floor(a), fb = b - std::floor(b);
+    const int i0 = int(std::floor(a)), j0 = int(std::floor(b));
+    const std::pair<int, double> tap[4] = {{j0 * w + i0, (1 - fa) * (1 - fb)}, {j0 * w + i0 + 1, fa * (1 - fb)},
+                                           {(j0 + 1) * w + i0, (1 - fa) * fb}, {(j0 + 1) * w + i0 + 1, fa * fb}};
+    for (auto [t, wt] : tap) entries.emplace_back(k, t, wt), seen[size_t(t)] += int(wt * wt * cpu::kFixedPoint + 0.5) > 0;
+    ref(k) = reference[m.pixel[size_t(k)]];
+  }
+  Eigen::SparseMatrix<double> A(q, n);
+  A.setFromTriplets(entries.begin(), entries.end());
+  const double mean = ref.mean();
+  int seen_count = 0;
+  for (int t = 0; t < n; ++t) seen_count += seen[size_t(t)] > 0;
+  const double mu = cpu::kSmoothness * q / seen_count;
+  entries.clear();  // N = A^T A + mu L (4-neighbour membrane between seen texels), unseen rows identity
+  for (int t = 0; t < n; ++t) {
+    const int i = t % w, j = t / w;
+    for (auto [di, dj] : {std::pair{1, 0}, {0, 1}}) {
+      if (i + di >= w || j + dj >= int(m.height)) continue;
+      const int u = (j + dj) * w + i + di;
+      if (!seen[size_t(t)] || !seen[size_t(u)]) continue;
+      entries.emplace_back(t, t, mu), entries.emplace_back(u, u, mu), entries.emplace_back(t, u, -mu),
+          entries.emplace_back(u, t, -mu);
+    }
+    if (!seen[size_t(t)]) entries.emplace_back(t, t, 1.0);
+  }
+  Eigen::SparseMatrix<double> L(n, n), S(n, n);
+  L.setFromTriplets(entries.begin(), entries.end());
+  entries.clear();
+  for (int t = 0; t < n; ++t) entries.emplace_back(t, t, seen[size_t(t)] ? 1.0 : 0.0);
+  S.setFromTriplets(entries.begin(), entries.end());  // keeps the seen texels' columns of A
+  const Eigen::SparseMatrix<double> As = A * S;
+  const Eigen::SparseMatrix<double> N = Eigen::SparseMatrix<double>(As.transpose() * As) + L;
+  const Eigen::VectorXd rhs = As.transpose() * (ref - Eigen::VectorXd::Constant(q, mean));
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(N);
+  REQUIRE(solver.info() == Eigen::Success);
+  const Eigen::VectorXd x = solver.solve(rhs) + Eigen::VectorXd::Constant(n, mean);
+  return A * x;
+}
+
 ViewCandidate candidate(uint32_t view, float l1, float l2, float alpha, float beta = 0) {
   // J = R(alpha) V(beta) diag(l1, l2) V(beta)^T, as DESIGN.md's per-triangle view.
   Eigen::Matrix2f R, V, L;
@@ -156,51 +206,18 @@ TEST_CASE("Views: the bake equals a dense double normal-equations solve", "[engi
       ViewImages ia, ib;
       cpu_engine->score_views(*sa, &c, 1, &ga, &ia);
       vk->score_views(*sb, &c, 1, &gb, &ib);
-      // Independent: the tile map from the CPU, then A assembled and solved densely in double.
+      // Independent: the tile map from the CPU, then the normal equations solved in double.
       cpu::TileMap m = cpu::map_to_tile(d.views[v], d.triangles.data(), size, ia.coverage.data(), c.j);
       REQUIRE(!m.pixel.empty());
-      const int n = int(m.width * m.height), q = int(m.pixel.size());
-      Eigen::MatrixXd A = Eigen::MatrixXd::Zero(q, n);
-      Eigen::VectorXd ref(q);
-      for (int k = 0; k < q; ++k) {
-        double a = m.a[size_t(k)], b = m.b[size_t(k)], fa = a - std::floor(a), fb = b - std::floor(b);
-        int i0 = int(std::floor(a)), j0 = int(std::floor(b)), w = int(m.width);
-        A(k, j0 * w + i0) += (1 - fa) * (1 - fb), A(k, j0 * w + i0 + 1) += fa * (1 - fb);
-        A(k, (j0 + 1) * w + i0) += (1 - fa) * fb, A(k, (j0 + 1) * w + i0 + 1) += fa * fb;
-        ref(k) = ia.reference[m.pixel[size_t(k)]];
-      }
-      // Texels that some pixel sees (a fixed-point weight^2 that rounds above 0) are the
-      // unknowns; the others stay at the mean reference (they cannot change the render).
-      std::vector<int> seen(size_t(n), 0);
-      for (int k = 0; k < q; ++k)
-        for (int t = 0; t < n; ++t) seen[size_t(t)] += int(A(k, t) * A(k, t) * cpu::kFixedPoint + 0.5) > 0;
-      double mean = ref.mean();
-      int seen_count = 0;
-      for (int t = 0; t < n; ++t) seen_count += seen[size_t(t)] > 0;
-      const double mu = cpu::kSmoothness * q / seen_count;
-      Eigen::MatrixXd L = Eigen::MatrixXd::Zero(n, n);  // 4-neighbour membrane between seen texels
-      for (int t = 0; t < n; ++t) {
-        int i = t % int(m.width), j = t / int(m.width);
-        for (auto [di, dj] : {std::pair{1, 0}, {0, 1}}) {
-          if (i + di >= int(m.width) || j + dj >= int(m.height)) continue;
-          int u = (j + dj) * int(m.width) + i + di;
-          if (!seen[size_t(t)] || !seen[size_t(u)]) continue;
-          L(t, t) += 1, L(u, u) += 1, L(t, u) -= 1, L(u, t) -= 1;
-        }
-      }
-      Eigen::MatrixXd N = A.transpose() * A + mu * L;
-      Eigen::VectorXd rhs = A.transpose() * (ref - A * Eigen::VectorXd::Constant(n, mean));
-      for (int t = 0; t < n; ++t)
-        if (!seen[size_t(t)]) N.row(t).setZero(), N.col(t).setZero(), N(t, t) = 1, rhs(t) = 0;
-      Eigen::VectorXd x = N.ldlt().solve(rhs) + Eigen::VectorXd::Constant(n, mean);
-      Eigen::VectorXd render = A * x;
+      const int q = int(m.pixel.size());
+      const Eigen::VectorXd render = exact_bake_render(m, ia.reference.data());
       double err_cpu = 0, err_vk = 0;
       for (int k = 0; k < q; ++k) {
         err_cpu = std::max(err_cpu, std::abs(render(k) - ia.candidate[m.pixel[size_t(k)]]));
         err_vk = std::max(err_vk, std::abs(render(k) - ib.candidate[m.pixel[size_t(k)]]));
       }
       INFO("view " << v << " J " << c.j[0] << " " << c.j[1] << " " << c.j[2] << " " << c.j[3]);
-      // CG stops at 1e-4 relative residual; rendered values agree to a few 1e-4.
+      // CG stops within its render tolerance (3e-5 RMS); single pixels may differ more.
       CHECK(err_cpu < 2e-3);
       CHECK(err_vk < 2e-3);
     }
@@ -443,5 +460,47 @@ TEST_CASE("Views: a triangle too large for one view is seen through patches that
   for (size_t k = 0; k < c.size(); k += 2) {
     CHECK(g[k] < 1e-3);
     CHECK(g[k + 1] > g[k] + 1e-3);
+  }
+}
+
+TEST_CASE("Views: CG stops within its render tolerance of the exact bake, near J = I as well", "[engine][views][vulkan]") {
+  // 90 texels over a 64 px view: under a pixel a texel at J = I, where the lattice's finest
+  // modes are barely seen and CG needs the most iterations (here 50-75 at J near I, 20 at
+  // J = 0.5 I).
+  const Square sq = square(90, 5, false);
+  const ViewSetDesc d = square_views(sq, 64);
+  const uint32_t size = d.size;
+  std::vector<ViewCandidate> c;
+  for (uint32_t v = 0; v < d.views.size(); ++v)
+    for (auto k : {candidate(v, 1, 1, 0), candidate(v, 0.98f, 0.97f, 0.05f), candidate(v, 0.9f, 0.7f, 0.4f, 0.3f),
+                   candidate(v, 0.5f, 0.5f, 1.0f)})
+      c.push_back(k);
+  UVPRESS_LAVAPIPE_OR_SKIP(vk);
+  auto cpu_engine = make_cpu_engine({});
+  for (Engine* engine : {cpu_engine.get(), vk.get()}) {
+    auto views = engine->prepare_views(d);
+    std::vector<float> g(c.size());
+    ViewImages img;
+    engine->score_views(*views, c.data(), c.size(), g.data(), &img);
+    for (size_t k = 0; k < c.size(); ++k) {
+      const uint8_t* cov = img.coverage.data() + k * size * size;
+      const float* ref = img.reference.data() + k * size * size;
+      cpu::TileMap m = cpu::map_to_tile(d.views[c[k].view], d.triangles.data(), size, cov, c[k].j);
+      const Eigen::VectorXd exact = exact_bake_render(m, ref);
+      double sq_err = 0;
+      for (size_t p = 0; p < m.pixel.size(); ++p) {
+        const double e = img.candidate[k * size * size + m.pixel[p]] - exact(Eigen::Index(p));
+        sq_err += e * e;
+      }
+      const double rms = std::sqrt(sq_err / double(m.pixel.size()));
+      uint32_t it = 0;
+      cpu::bake_tile(m, ref, &it);
+      INFO(engine->device().backend << " candidate " << k << " tile " << m.width << "x" << m.height << " pixels "
+                                    << m.pixel.size() << " CPU iterations " << it << " render RMS vs exact " << rms);
+      // The estimate of the error sums only the last 4 terms of its series, so it falls
+      // short of the true error, most where CG converges slowly (here up to 1.4x).
+      CHECK(rms <= 2 * cpu::kBakeRenderTolerance);
+    }
+    CHECK(engine->validation_errors() == 0);
   }
 }
