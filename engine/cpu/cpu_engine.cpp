@@ -43,6 +43,7 @@ struct CpuViewSet final : ViewSet {
   ViewSetDesc desc;  // texture pointer dropped after prepare
   std::vector<uint8_t> coverage;
   std::vector<float> reference;
+  std::vector<cpu::ViewPixels> pixels;  // per view: what every candidate's tile map starts from
   uint32_t size() const override { return desc.size; }
   uint32_t view_count() const override { return uint32_t(desc.views.size()); }
 };
@@ -92,9 +93,11 @@ class CpuEngine final : public Engine {
     const size_t n = size_t(d.size) * d.size;
     set->coverage.resize(n * d.views.size());
     set->reference.resize(n * d.views.size());
+    set->pixels.resize(d.views.size());
     parallel_for(uint32_t(d.views.size()), threads_, [&](uint32_t v) {
       cpu::rasterize_view(d.views[v], d.triangles.data(), d.size, d.texture, d.texture_width, d.texture_height,
                           set->coverage.data() + v * n, set->reference.data() + v * n);
+      set->pixels[v] = cpu::view_pixels(d.views[v], d.triangles.data(), d.size, set->coverage.data() + v * n);
     });
     return set;
   }
@@ -124,8 +127,7 @@ class CpuEngine final : public Engine {
         local.resize(n);
         cand = local.data();
       }
-      gmsd[k] = cpu::score_view(set->desc.views[v], set->desc.triangles.data(), S, cov, ref, c[k].j, cand,
-                                lattice ? lattice + k : nullptr);
+      gmsd[k] = cpu::score_view(set->pixels[v], S, ref, c[k].j, cand, lattice ? lattice + k : nullptr);
     });
   }
 

@@ -22,35 +22,51 @@ inline uint32_t slot(int32_t di, int32_t dj) { return uint32_t((di + 1) + 3 * (d
 
 }  // namespace
 
-TileMap map_to_tile(const ViewDesc& view, const ViewTriangle* tris, uint32_t size, const uint8_t* coverage,
-                    const float j[4]) {
-  TileMap m;
-  std::vector<float> u, v;
-  std::vector<uint32_t> group;
-  const uint32_t groups = std::min(std::max(view.group_count, 1u), shader::kViewMaxGroups);
-  float lo_u[shader::kViewMaxGroups], hi_u[shader::kViewMaxGroups], lo_v[shader::kViewMaxGroups],
-      hi_v[shader::kViewMaxGroups];
-  std::fill(lo_u, lo_u + groups, INFINITY), std::fill(hi_u, hi_u + groups, -INFINITY);
-  std::fill(lo_v, lo_v + groups, INFINITY), std::fill(hi_v, hi_v + groups, -INFINITY);
+ViewPixels view_pixels(const ViewDesc& view, const ViewTriangle* tris, uint32_t size, const uint8_t* coverage) {
+  ViewPixels v;
+  v.groups = std::min(std::max(view.group_count, 1u), shader::kViewMaxGroups);
   for (uint32_t p = 0; p < size * size; ++p) {
     if (coverage[p] == shader::kNoTriangle) continue;
     const ViewTriangle& t = tris[view.first_triangle + coverage[p]];
-    const uint32_t g = std::min(t.group, groups - 1);
     float cx = float(p % size) + 0.5f, cy = float(p / size) + 0.5f;
     float s = t.s[0] + t.s[1] * cx;
     s += t.s[2] * cy;
     float tt = t.t[0] + t.t[1] * cx;
     tt += t.t[2] * cy;
-    float ds = s - t.anchor_s, dt = tt - t.anchor_t;
+    v.pixel.push_back(p);
+    v.ds.push_back(s - t.anchor_s), v.dt.push_back(tt - t.anchor_t);
+    v.group.push_back(uint8_t(std::min(t.group, v.groups - 1)));
+  }
+  return v;
+}
+
+TileMap map_to_tile(const ViewDesc& view, const ViewTriangle* tris, uint32_t size, const uint8_t* coverage,
+                    const float j[4]) {
+  return map_to_tile(view_pixels(view, tris, size, coverage), j);
+}
+
+TileMap map_to_tile(const ViewPixels& v, const float j[4]) {
+  static_assert(shader::kViewMaxGroups <= 256, "groups are stored in a byte");
+  TileMap m;
+  const uint32_t groups = v.groups;
+  const size_t count = v.pixel.size();
+  std::vector<float> u(count), w(count);
+  float lo_u[shader::kViewMaxGroups], hi_u[shader::kViewMaxGroups], lo_v[shader::kViewMaxGroups],
+      hi_v[shader::kViewMaxGroups];
+  std::fill(lo_u, lo_u + groups, INFINITY), std::fill(hi_u, hi_u + groups, -INFINITY);
+  std::fill(lo_v, lo_v + groups, INFINITY), std::fill(hi_v, hi_v + groups, -INFINITY);
+  for (size_t k = 0; k < count; ++k) {
+    const uint32_t g = v.group[k];
+    const float ds = v.ds[k], dt = v.dt[k];
     float pu = j[0] * ds;
     pu += j[1] * dt;
     float pv = j[2] * ds;
     pv += j[3] * dt;
-    m.pixel.push_back(p);
-    u.push_back(pu), v.push_back(pv), group.push_back(g);
+    u[k] = pu, w[k] = pv;
     lo_u[g] = std::min(lo_u[g], pu), hi_u[g] = std::max(hi_u[g], pu);
     lo_v[g] = std::min(lo_v[g], pv), hi_v[g] = std::max(hi_v[g], pv);
   }
+  m.pixel = v.pixel;
   if (m.pixel.empty()) return m;
   // One region per group, shelf-packed left to right with a texel of gap (the membrane
   // term couples regions only through it, negligibly). The lattice is J's own; only a
@@ -79,10 +95,10 @@ TileMap map_to_tile(const ViewDesc& view, const ViewTriangle* tris, uint32_t siz
     inv *= 0.5f;
   }
   m.lattice = 1.0f / inv;
-  m.a.resize(u.size()), m.b.resize(u.size());
-  for (size_t k = 0; k < u.size(); ++k) {
-    const uint32_t g = group[k];
-    float a = u[k] * inv - ou[g], b = v[k] * inv - ov[g];
+  m.a.resize(count), m.b.resize(count);
+  for (size_t k = 0; k < count; ++k) {
+    const uint32_t g = v.group[k];
+    float a = u[k] * inv - ou[g], b = w[k] * inv - ov[g];
     // Inside the region by construction; the clamp only catches the rounding of a value
     // a hair below the region's last texel up onto it, at coarse lattices.
     m.a[k] = std::min(a + px[g], float(m.width) - 1.0001f), m.b[k] = std::min(b + py[g], float(m.height) - 1.0001f);
@@ -256,9 +272,9 @@ void render_tile(const TileMap& m, const std::vector<float>& tile, uint32_t size
   }
 }
 
-float score_view(const ViewDesc& view, const ViewTriangle* tris, uint32_t size, const uint8_t* coverage,
-                 const float* reference, const float j[4], float* candidate, float* lattice) {
-  TileMap m = map_to_tile(view, tris, size, coverage, j);
+float score_view(const ViewPixels& pixels, uint32_t size, const float* reference, const float j[4], float* candidate,
+                 float* lattice) {
+  TileMap m = map_to_tile(pixels, j);
   float mean = 0;
   const std::vector<float> x = bake_tile(m, reference, nullptr, &mean);
   render_tile(m, x, size, candidate, mean);

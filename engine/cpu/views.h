@@ -35,6 +35,19 @@ struct TileMap {
 TileMap map_to_tile(const ViewDesc& view, const ViewTriangle* triangles, uint32_t size, const uint8_t* coverage,
                     const float j[4]);
 
+// The part of the tile map that does not depend on J, made once per view (prepare_views)
+// rather than once per candidate: the covered pixels, each one's (s, t) - anchor_k of its
+// ring triangle k (texels) and its group.
+struct ViewPixels {
+  uint32_t groups = 1;
+  std::vector<uint32_t> pixel;  // covered pixel indices, in raster order
+  std::vector<float> ds, dt;
+  std::vector<uint8_t> group;
+};
+ViewPixels view_pixels(const ViewDesc& view, const ViewTriangle* triangles, uint32_t size, const uint8_t* coverage);
+// map_to_tile of the view `pixels` was made from: the same map, bit for bit.
+TileMap map_to_tile(const ViewPixels& pixels, const float j[4]);
+
 // Fixed-point scale of the normal-equation sums: integer sums are exact and order-free,
 // so a GPU accumulating them with atomics gets the CPU's numbers bit for bit.
 constexpr float kFixedPoint = 65536.0f;
@@ -71,7 +84,7 @@ void render_tile(const TileMap& map, const std::vector<float>& tile, uint32_t si
 
 // Everything for one candidate: map, bake, render, GMSD against the reference; the tile's
 // lattice spacing in `lattice` when given.
-float score_view(const ViewDesc& view, const ViewTriangle* triangles, uint32_t size, const uint8_t* coverage,
-                 const float* reference, const float j[4], float* candidate, float* lattice = nullptr);
+float score_view(const ViewPixels& pixels, uint32_t size, const float* reference, const float j[4], float* candidate,
+                 float* lattice = nullptr);
 
 }  // namespace uvpress::engine::cpu
