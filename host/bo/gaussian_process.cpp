@@ -1,5 +1,7 @@
 #include "bo/gaussian_process.h"
 
+#include "bo/exp_neg.h"
+
 #include <Eigen/Cholesky>
 #include <nlopt.hpp>
 
@@ -11,6 +13,28 @@ namespace uvpress::bo {
 
 namespace {
 constexpr double kJitter = 1e-10;  // added to the diagonal: keeps duplicated points factorable
+
+}  // namespace
+
+// Matern 5/2 between the scaled point `xs` and each of the n scaled points in `all` (row by
+// row), into out[0..n): squared distances first, then the kernel in lanes (exp_neg).
+__attribute__((target_clones("avx2", "default")))
+void GaussianProcess::kernel_row(const double* xs, size_t n, double* out) const {
+  const double* all = xs_.data();
+  const size_t dim = size_t(dim_);
+  for (size_t i = 0; i < n; ++i) {
+    double r2 = 0;
+    for (size_t d = 0; d < dim; ++d) {
+      const double t = xs[d] - all[i * dim + d];
+      r2 += t * t;
+    }
+    out[i] = r2;
+  }
+  const double s2 = signal2_;
+  for (size_t i = 0; i < n; ++i) {
+    const double r = std::sqrt(5.0 * out[i]);  // sqrt(5) r
+    out[i] = s2 * (1 + r + r * r / 3) * exp_neg(r);
+  }
 }
 
 GaussianProcess::GaussianProcess(int dim) : dim_(dim) {
@@ -34,15 +58,6 @@ void GaussianProcess::rescale() {
   for (size_t i = 0; i < x_.size(); ++i) xs_[i] = x_[i] * inv_length_[i % size_t(dim_)];
 }
 
-double GaussianProcess::kernel(const double* a, const double* b) const {
-  double r2 = 0;
-  for (int d = 0; d < dim_; ++d) {
-    double t = a[d] - b[d];
-    r2 += t * t;
-  }
-  const double r = std::sqrt(5.0 * r2);  // sqrt(5) r
-  return signal2_ * (1 + r + r * r / 3) * std::exp(-r);
-}
 
 void GaussianProcess::solve_alpha() {
   const Eigen::Index n = Eigen::Index(y_.size());
@@ -57,9 +72,11 @@ void GaussianProcess::solve_alpha() {
 void GaussianProcess::refactor() {
   const Eigen::Index n = Eigen::Index(y_.size());
   Eigen::MatrixXd K(n, n);
-  for (Eigen::Index i = 0; i < n; ++i)
-    for (Eigen::Index j = 0; j <= i; ++j)
-      K(i, j) = kernel(&xs_[size_t(i) * size_t(dim_)], &xs_[size_t(j) * size_t(dim_)]);
+  std::vector<double> row(static_cast<size_t>(n));
+  for (Eigen::Index i = 0; i < n; ++i) {
+    kernel_row(&xs_[size_t(i) * size_t(dim_)], size_t(i) + 1, row.data());
+    for (Eigen::Index j = 0; j <= i; ++j) K(i, j) = row[size_t(j)];
+  }
   K.diagonal().array() += noise2_ + kJitter;
   Eigen::LLT<Eigen::MatrixXd, Eigen::Lower> llt(K);
   factor_ok_ = llt.info() == Eigen::Success;
@@ -84,7 +101,7 @@ void GaussianProcess::add(const double* x, double y) {
   double xs[kMaxDim];
   for (int d = 0; d < dim_; ++d) xs[d] = x[d] * inv_length_[size_t(d)];
   Eigen::VectorXd k(n);
-  for (Eigen::Index j = 0; j < n; ++j) k(j) = kernel(xs, &xs_[size_t(j) * size_t(dim_)]);
+  kernel_row(xs, size_t(n), k.data());
   chol_.topLeftCorner(n, n).triangularView<Eigen::Lower>().solveInPlace(k);
   chol_.block(n, 0, 1, n) = k.transpose();
   chol_(n, n) = std::sqrt(std::max(signal2_ + noise2_ + kJitter - k.squaredNorm(), kJitter));
@@ -108,7 +125,7 @@ void GaussianProcess::predict(const double* x, size_t m, double* mean, double* v
   for (Eigen::Index q = 0; q < Eigen::Index(m); ++q) {
     double xs[kMaxDim];
     for (int d = 0; d < dim_; ++d) xs[d] = x[size_t(q) * size_t(dim_) + size_t(d)] * inv_length_[size_t(d)];
-    for (Eigen::Index i = 0; i < n; ++i) ks(i, q) = kernel(xs, &xs_[size_t(i) * size_t(dim_)]);
+    kernel_row(xs, size_t(n), ks.col(q).data());
   }
   Eigen::VectorXd mu = ks.transpose() * alpha_;
   chol_.topLeftCorner(n, n).triangularView<Eigen::Lower>().solveInPlace(ks);  // v = L^-1 k*

@@ -44,7 +44,7 @@ class GaussianProcess {
   double log_marginal_likelihood() const;
 
  private:
-  double kernel(const double* a, const double* b) const;  // Matern 5/2 of two scaled points
+  void kernel_row(const double* xs, size_t n, double* out) const;  // Matern 5/2, xs against xs_[0..n)
   void rescale();                                         // xs_ = x_ / length scales
   void refactor();                                        // full Cholesky and alpha
   void solve_alpha();                                     // alpha = K^-1 (y - mean) / scale

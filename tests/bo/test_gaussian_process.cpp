@@ -1,10 +1,12 @@
 #include <catch2/catch.hpp>
 
+#include "bo/exp_neg.h"
 #include "bo/gaussian_process.h"
 
 #include <Eigen/Dense>
 
 #include <cmath>
+#include <random>
 
 using namespace uvpress::bo;
 
@@ -71,4 +73,25 @@ TEST_CASE("GP interpolates its data and fitting raises the marginal likelihood",
   const double off[2] = {0.42, 0.61};
   gp.predict(off, &m, &v);
   CHECK(m == Approx(f({0.42, 0.61})).margin(0.05));  // smooth function: good between samples
+}
+
+TEST_CASE("exp_neg is within 2 ulp of libm's exp over the kernel's whole range", "[bo]") {
+  // Every exponent of 2 from 2^-30 to 708, densely, plus random points; relative to libm's
+  // exp (correctly rounded in all but rare cases), counted in units of the last place.
+  std::vector<double> r = {0.0, 1e-300, 0.5 * M_LN2, M_LN2, 1.0, 700.0, 708.0};
+  for (double x = 0x1p-30; x < 708; x *= 1.001) r.push_back(x);
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> any(0, 708);
+  for (int k = 0; k < 200000; ++k) r.push_back(any(rng));
+  double worst = 0, at = 0;
+  for (double v : r) {
+    const double want = std::exp(-v), got = exp_neg(v);
+    const double ulps = std::abs(got - want) / (std::nextafter(want, INFINITY) - want);
+    if (ulps > worst) worst = ulps, at = v;
+  }
+  INFO("worst " << worst << " ulp at r = " << at);
+  CHECK(worst <= 2.0);
+  CHECK(exp_neg(0.0) == 1.0);
+  CHECK(exp_neg(709.0) == 0.0);   // below 2^-1021: 0 by contract
+  CHECK(exp_neg(1e308) == 0.0);
 }
