@@ -30,7 +30,7 @@ const uint OFF_R = OFF_K + 9u * kTexels, OFF_X = OFF_R + kTexels;
 const uint OFF_P = OFF_X + kTexels, OFF_RR = OFF_P + (kTileMax + 2u) * (kTileMax + 2u);
 const uint OFF_AP = OFF_RR + kTexels, OFF_DIAG = OFF_AP + kTexels;
 const uint kSlot = OFF_DIAG + kTexels;
-const float kFixedPoint = 65536.0, kSmoothness = 1e-4, kRenderTolerance = 3e-5;
+const float kFixedPoint = 65536.0, kSmoothness = 1e-4, kRenderTolerance = 5e-6;
 const uint kMaxIterations = 200u;
 
 uint g_slot, g_ref_base, g_cov_base;
