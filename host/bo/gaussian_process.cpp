@@ -20,15 +20,14 @@ constexpr double kJitter = 1e-10;  // added to the diagonal: keeps duplicated po
 // row), into out[0..n): squared distances first, then the kernel in lanes (exp_neg).
 __attribute__((target_clones("avx2", "default")))
 void GaussianProcess::kernel_row(const double* xs, size_t n, double* out) const {
-  const double* all = xs_.data();
-  const size_t dim = size_t(dim_);
-  for (size_t i = 0; i < n; ++i) {
-    double r2 = 0;
-    for (size_t d = 0; d < dim; ++d) {
-      const double t = xs[d] - all[i * dim + d];
-      r2 += t * t;
+  std::fill(out, out + n, 0.0);
+  for (int d = 0; d < dim_; ++d) {  // dimension by dimension: the same sums, in lanes
+    const double* col = xs_[size_t(d)].data();
+    const double c = xs[d];
+    for (size_t i = 0; i < n; ++i) {
+      const double t = c - col[i];
+      out[i] += t * t;
     }
-    out[i] = r2;
   }
   const double s2 = signal2_;
   for (size_t i = 0; i < n; ++i) {
@@ -54,10 +53,12 @@ void GaussianProcess::set_hyper(const GpHyperparameters& h) {
 }
 
 void GaussianProcess::rescale() {
-  xs_.resize(x_.size());
-  for (size_t i = 0; i < x_.size(); ++i) xs_[i] = x_[i] * inv_length_[i % size_t(dim_)];
+  const size_t n = y_.size();
+  for (int d = 0; d < dim_; ++d) {
+    xs_[size_t(d)].resize(n);
+    for (size_t i = 0; i < n; ++i) xs_[size_t(d)][i] = x_[i * size_t(dim_) + size_t(d)] * inv_length_[size_t(d)];
+  }
 }
-
 
 void GaussianProcess::solve_alpha() {
   const Eigen::Index n = Eigen::Index(y_.size());
@@ -74,7 +75,9 @@ void GaussianProcess::refactor() {
   Eigen::MatrixXd K(n, n);
   std::vector<double> row(static_cast<size_t>(n));
   for (Eigen::Index i = 0; i < n; ++i) {
-    kernel_row(&xs_[size_t(i) * size_t(dim_)], size_t(i) + 1, row.data());
+    double xs[kMaxDim];
+    for (int d = 0; d < dim_; ++d) xs[d] = xs_[size_t(d)][size_t(i)];
+    kernel_row(xs, size_t(i) + 1, row.data());
     for (Eigen::Index j = 0; j <= i; ++j) K(i, j) = row[size_t(j)];
   }
   K.diagonal().array() += noise2_ + kJitter;
@@ -106,7 +109,7 @@ void GaussianProcess::add(const double* x, double y) {
   chol_.block(n, 0, 1, n) = k.transpose();
   chol_(n, n) = std::sqrt(std::max(signal2_ + noise2_ + kJitter - k.squaredNorm(), kJitter));
   x_.insert(x_.end(), x, x + dim_);
-  xs_.insert(xs_.end(), xs, xs + dim_);
+  for (int d = 0; d < dim_; ++d) xs_[size_t(d)].push_back(xs[d]);
   y_.push_back(y);
   solve_alpha();
 }

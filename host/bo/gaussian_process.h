@@ -44,7 +44,7 @@ class GaussianProcess {
   double log_marginal_likelihood() const;
 
  private:
-  void kernel_row(const double* xs, size_t n, double* out) const;  // Matern 5/2, xs against xs_[0..n)
+  void kernel_row(const double* xs, size_t n, double* out) const;  // Matern 5/2, xs against points 0..n-1
   void rescale();                                         // xs_ = x_ / length scales
   void refactor();                                        // full Cholesky and alpha
   void solve_alpha();                                     // alpha = K^-1 (y - mean) / scale
@@ -54,7 +54,9 @@ class GaussianProcess {
   std::array<double, kMaxDim> inv_length_{};
   double signal2_ = 1, noise2_ = 1e-12;
   std::vector<double> x_, y_;  // n x dim inputs, n outputs
-  std::vector<double> xs_;     // inputs divided by the length scales: r^2 = |xs_i - xs_j|^2
+  // Inputs divided by the length scales (r^2 = |xs_i - xs_j|^2), one array per dimension so
+  // that kernel_row's distances run over the points in vector lanes.
+  std::array<std::vector<double>, kMaxDim> xs_;
   double y_mean_ = 0, y_scale_ = 1;
   Eigen::MatrixXd chol_;       // lower-triangular factor of K + noise I in its top-left n x n
   Eigen::VectorXd alpha_;
