@@ -37,13 +37,35 @@ double expected_improvement(double best, double mean, double sd) {
   return (best - mean) * normal_cdf(z) + sd * normal_pdf(z);
 }
 
+namespace {
+
+// The radical inverse of i in base P, digit by digit. P is a template argument so that the
+// divisions are by constants (a multiply and a shift): with P read from a table they were
+// most of propose()'s own time.
+template <uint64_t P>
+double radical_inverse(uint64_t i) {
+  double f = 1, r = 0;
+  for (; i > 0; i /= P) {
+    f /= double(P);
+    r += f * double(i % P);
+  }
+  return r;
+}
+
+}  // namespace
+
 void halton(uint64_t index, int dim, const double* shift, double* out) {
-  static const int primes[kMaxDim] = {2, 3, 5, 7, 11, 13, 17, 19};
   for (int d = 0; d < dim; ++d) {
-    double f = 1, r = 0;
-    for (uint64_t i = index; i > 0; i /= uint64_t(primes[d])) {
-      f /= primes[d];
-      r += f * double(i % uint64_t(primes[d]));
+    double r = 0;
+    switch (d) {  // the first kMaxDim primes
+      case 0: r = radical_inverse<2>(index); break;
+      case 1: r = radical_inverse<3>(index); break;
+      case 2: r = radical_inverse<5>(index); break;
+      case 3: r = radical_inverse<7>(index); break;
+      case 4: r = radical_inverse<11>(index); break;
+      case 5: r = radical_inverse<13>(index); break;
+      case 6: r = radical_inverse<17>(index); break;
+      default: r = radical_inverse<19>(index); break;
     }
     r += shift ? shift[d] : 0.0;
     out[d] = r - std::floor(r);
