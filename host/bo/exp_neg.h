@@ -6,7 +6,7 @@
 // e^x = 2^k e^t with k = round(x / ln 2) and t = x - k ln 2 in [-ln 2 / 2, ln 2 / 2] (ln 2
 // split in two so that k ln 2_hi is exact: Cody & Waite, fdlibm's constants); e^t by its
 // Taylor series to t^13 (the remainder is below 5e-18 relative); 2^k written into the
-// exponent's bits. Within 2 ulp of the correctly rounded value (tests/bo); 0 for r > 708,
+// exponent's bits. Within 1 ulp of libm's exp over [0, 708] (tests/bo); 0 for r > 708,
 // where e^-r is below 2^-1021 and no kernel value can be told from 0.
 #pragma once
 

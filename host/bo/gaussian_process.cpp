@@ -13,11 +13,10 @@ namespace uvpress::bo {
 
 namespace {
 constexpr double kJitter = 1e-10;  // added to the diagonal: keeps duplicated points factorable
-
 }  // namespace
 
-// Matern 5/2 between the scaled point `xs` and each of the n scaled points in `all` (row by
-// row), into out[0..n): squared distances first, then the kernel in lanes (exp_neg).
+// Matern 5/2 between the scaled point `xs` and each of the first n stored points, into
+// out[0..n): squared distances first, then the kernel, each loop in vector lanes (exp_neg).
 __attribute__((target_clones("avx2", "default")))
 void GaussianProcess::kernel_row(const double* xs, size_t n, double* out) const {
   std::fill(out, out + n, 0.0);
