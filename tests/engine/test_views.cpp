@@ -486,7 +486,7 @@ TEST_CASE("Views: a triangle too large for one view is seen through patches that
 
 TEST_CASE("Views: CG stops within its render tolerance of the exact bake, near J = I as well", "[engine][views][vulkan]") {
   // 90 texels over a 64 px view: under a pixel a texel at J = I, where the lattice's finest
-  // modes are barely seen and CG needs the most iterations (here 85-100 at J near I, 25 at
+  // modes are barely seen and CG needs the most iterations (here 85-100 at J near I, 23-27 at
   // J = 0.5 I).
   const Square sq = square(90, 5, false);
   const ViewSetDesc d = square_views(sq, 64);
