@@ -216,6 +216,7 @@ std::vector<uint8_t> encode_image(const Image& image, const EncodeSettings& sett
   if (settings.format == "png") {
     PngOptions o;
     o.palette = settings.palette;
+    o.draft = settings.draft;
     return encode_png(image, o);
   }
   if (settings.format != "jpeg") throw std::invalid_argument("encode_image: format must be png or jpeg");

@@ -41,6 +41,7 @@ struct EncodeSettings {
   int jpeg_quality = 95;       // JPEG: IJG quality, estimated from the input's tables
   int jpeg_h_sampling = 2, jpeg_v_sampling = 2;  // JPEG: luma sampling factors (2, 2: 4:2:0)
   bool progressive = false;    // JPEG: progressive when the input was
+  bool draft = false;          // PNG: one fast pass, the same texels (PngOptions::draft); never for output
 };
 
 // The settings that reproduce `bytes`' encoding: PNG (paletted or not) or JPEG (quality

@@ -45,7 +45,7 @@ void on_warning(png_structp, png_const_charp) {}
 
 // One encode at one filter choice and zlib strategy. Only plain data lives in this frame,
 // so the longjmp of libpng's error path skips no destructor.
-bool write_png(const Rows& r, int filters, int strategy, Sink* sink) {
+bool write_png(const Rows& r, int filters, int level, int strategy, Sink* sink) {
   png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, sink, on_error, on_warning);
   if (!png) return false;
   png_infop info = png_create_info_struct(png);
@@ -54,7 +54,7 @@ bool write_png(const Rows& r, int filters, int strategy, Sink* sink) {
     return false;
   }
   png_set_write_fn(png, sink, write_bytes, flush);
-  png_set_compression_level(png, Z_BEST_COMPRESSION);
+  png_set_compression_level(png, level);
   png_set_compression_mem_level(png, MAX_MEM_LEVEL);
   png_set_compression_strategy(png, strategy);
   png_set_filter(png, PNG_FILTER_TYPE_BASE, filters);
@@ -151,11 +151,14 @@ std::vector<uint8_t> encode_png(const Image& image, const PngOptions& options) {
   // on smooth colour it wins, on palettes and flat areas no filter often does. Try both,
   // and Paeth alone, and keep the smallest.
   const int filters[] = {PNG_ALL_FILTERS, PNG_FILTER_NONE, PNG_FILTER_PAETH};
+  const size_t tries = options.draft ? 1 : 3;
+  const int level = options.draft ? Z_BEST_SPEED : Z_BEST_COMPRESSION;
   std::vector<uint8_t> best;
   std::string error;
-  for (int f : filters) {
+  for (size_t k = 0; k < tries; ++k) {
+    const int f = options.draft ? PNG_FILTER_NONE : filters[k];
     Sink sink;
-    if (!write_png(rows, f, Z_DEFAULT_STRATEGY, &sink)) {
+    if (!write_png(rows, f, level, Z_DEFAULT_STRATEGY, &sink)) {
       error = sink.error;
       continue;
     }

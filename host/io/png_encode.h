@@ -16,6 +16,10 @@ struct PngOptions {
   // were paletted; ignored for 16-bit images.
   bool palette = false;
   float dithering = 1.0f;  // Floyd-Steinberg strength for the palette (libimagequant's default)
+  // One fast pass (zlib's fastest level, no row filter) instead of the strongest of three:
+  // the same texels in larger bytes, for files that are decoded and scored but not written
+  // (reparam's candidates).
+  bool draft = false;
 };
 
 // Stored values as they are (no colour conversion). An alpha channel whose every texel is

@@ -382,6 +382,9 @@ struct Realized {
   size_t overlap_fallback_charts = 0;  // charts kept at their input shape because their fit overlapped
   double t_mesh = 0, t_pack = 0, t_bake = 0;
   double q = -1;                     // 20-view GMSD of the file as written (-1: not scored)
+  // Images encoded as drafts (io::EncodeSettings::draft), with their texels: encoded for
+  // good (finish_encoding) only if this candidate is kept.
+  std::vector<std::pair<int, Image>> drafts;
 };
 
 perceptual::TriangleTarget target_of(const perceptual::TriangleResult& r, double floor, bool rotate) {
@@ -866,8 +869,12 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
       exact_texels += copied;
       const std::vector<uint8_t> old_bytes = file.image_bytes[size_t(i)];
       // Written as the input was (its codec, palette, JPEG quality and subsampling): a
-      // re-baked texture costs what its author accepted for it.
-      file.image_bytes[size_t(i)] = io::encode_image(baked, io::encode_settings_of(old_bytes));
+      // re-baked texture costs what its author accepted for it. A PNG is drafted (the same
+      // texels, one fast zlib pass): most candidates are only scored, and the strongest
+      // encoding was 4-7 % of a run (Fox, the truck) spent on bytes nobody kept.
+      io::EncodeSettings settings = io::encode_settings_of(old_bytes);
+      settings.draft = settings.format == "png";
+      file.image_bytes[size_t(i)] = io::encode_image(baked, settings);
       out.old_texels += double(source.width) * source.height;
       out.new_texels += double(baked.width) * baked.height;
       TextureReport& t = out.textures.emplace_back();
@@ -877,7 +884,8 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
       t.old_size = {source.width, source.height};
       t.new_size = {baked.width, baked.height};
       t.old_bytes = old_bytes.size();
-      t.new_bytes = file.image_bytes[size_t(i)].size();
+      t.new_bytes = file.image_bytes[size_t(i)].size();  // a draft's; count_texture_costs counts what is written
+      if (settings.draft) out.drafts.emplace_back(i, std::move(baked));
       if (progress) progress(bake_stage, ++baked_count, L.images.size());
     }
     out.t_bake += t0.seconds();
@@ -1362,6 +1370,14 @@ void choose_layout(Run& run, const std::vector<Candidate>& plans) {
   }
 }
 
+// The kept candidate's drafted images encoded for good, as the input was (the same texels:
+// what was scored is what is written).
+void finish_encoding(Run& run) {
+  for (auto& [i, image] : run.chosen.drafts)
+    run.file.image_bytes[size_t(i)] = io::encode_image(image, io::encode_settings_of(run.original.image_bytes[size_t(i)]));
+  run.chosen.drafts.clear();
+}
+
 // Reparam's own q-c curve (bench quality, demo): at each of o.curve_costs the best on
 // screen of the layouts reparam chose among at the requested cost (Run::curve_plans: the
 // kept one and the best other, at both gutters), each with its shapes as they
@@ -1533,6 +1549,7 @@ ReparamResult reparam(io::GltfFile& file, engine::Engine& engine, const ReparamO
       !run.prepared.empty() && (plans.size() > 1 || (o.max_gmsd <= 0 && (o.guard || o.least_squares_bake)));
   if (scoring) set_up_scoring(run);
   choose_layout(run, plans);
+  finish_encoding(run);
   if (!o.curve_costs.empty() && run.scorer) build_curve(run);
   if (layout_out) *layout_out = file;
   result.chosen = run.prepared.empty() ? "untouched" : "reparam";

@@ -140,6 +140,25 @@ TEST_CASE("PNG at the strongest zlib level and the best filter: no larger than O
   CHECK(mean_difference(img, io::decode_image(ours, "ours"), 3) < 1e-6);
 }
 
+TEST_CASE("PNG drafts decode to the texels of the final encode, RGB and palette, and cost more bytes", "[io][encode]") {
+  // reparam scores its candidates from drafts and writes the kept one encoded for good:
+  // what was scored must be what is written, texel for texel (the palette too).
+  for (bool palette : {false, true}) {
+    INFO("palette " << palette);
+    const Image img = smooth_image(160, 96, 4);
+    io::EncodeSettings final_settings;
+    final_settings.palette = palette;
+    io::EncodeSettings draft = final_settings;
+    draft.draft = true;
+    const auto a = io::encode_image(img, final_settings), b = io::encode_image(img, draft);
+    CHECK(png_color_type(a) == png_color_type(b));
+    const Image da = io::decode_image(a, "final"), db = io::decode_image(b, "draft");
+    REQUIRE(da.pixels.size() == db.pixels.size());
+    CHECK(da.pixels == db.pixels);
+    CHECK(b.size() > a.size());  // the strongest of three passes against one fast one
+  }
+}
+
 TEST_CASE("PNG palette on Duck's paletted texture: kept paletted, near the input's size, below RGB", "[io][encode][shared]") {
   auto shared = test::shared_dir();
   if (!shared) UVPRESS_SKIP("../shared is absent");
