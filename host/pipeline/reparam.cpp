@@ -380,6 +380,7 @@ struct Realized {
   size_t flips = 0, charts = 0, mesh_failed = 0;
   size_t overlaps_new = 0;           // triangle pairs overlapping in the written UVs, not in the input's
   size_t overlap_fallback_charts = 0;  // charts kept at their input shape because their fit overlapped
+  size_t unreshaped_units = 0;       // units whose texels could be copied (cand.exact), before snapping
   double t_mesh = 0, t_pack = 0, t_bake = 0;
   double q = -1;                     // 20-view GMSD of the file as written (-1: not scored)
   // Images encoded as drafts (io::EncodeSettings::draft), with their texels: encoded for
@@ -705,6 +706,7 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
         unit_exact[u] = 1;
         for (uint32_t c : units[u]) unit_exact[u] &= char(new_uv_of[c] == charts[c].uv);
         shapes[u].snap = unit_exact[u] != 0;  // so that the atlas chosen has room for whole-texel origins
+        out.unreshaped_units += size_t(unit_exact[u]);
       }
     // The image edges: half the gutter on an axis a sampler repeats across, else none, but
     // room for the copies' first ring (bilinear taps at level 0), which clamping would
@@ -1278,8 +1280,8 @@ eval::Scored score(Run& run, const io::GltfFile& f, const std::string& name) {
 }
 
 // Builds a candidate into a copy of the input, scores it, and keeps it (in run.file) when
-// it is the first or scores better.
-void consider_candidate(Run& run, const Candidate& c) {
+// it is the first or scores better. Returns its unreshaped units (Realized::unreshaped_units).
+size_t consider_candidate(Run& run, const Candidate& c) {
   io::GltfFile f = run.original;
   const Stopwatch t0;
   Realized r = realize(run.asset, run.layouts, run.prepared, run.layout_base, f, run.engine, run.o, c, run.progress,
@@ -1287,10 +1289,12 @@ void consider_candidate(Run& run, const Candidate& c) {
   run.t_build += t0.seconds();
   if (run.scorer && r.overlaps_new == 0) r.q = score(run, f, r.name).q;
   run.result.candidates.push_back({r.name, r.old_texels > 0 ? r.new_texels / r.old_texels : 1.0, r.q, r.overlaps_new});
+  const size_t unreshaped = r.unreshaped_units;
   // New UV overlaps disqualify a layout whatever its score: never written.
-  if (r.overlaps_new > 0) return;
+  if (r.overlaps_new > 0) return unreshaped;
   const bool have = !run.chosen.name.empty();
   if (!have || (r.q >= 0 && r.q < run.chosen.q)) run.chosen = std::move(r), run.file = std::move(f), run.chosen_plan = c;
+  return unreshaped;
 }
 
 // Every plan built and scored, the best kept; then the kept layout with the least-squares
@@ -1299,7 +1303,7 @@ void choose_layout(Run& run, const std::vector<Candidate>& plans) {
   const ReparamOptions& o = run.o;
   const auto& scorer = run.scorer;
   const Candidate& chosen_plan = run.chosen_plan;
-  auto consider = [&run](const Candidate& c) { consider_candidate(run, c); };
+  auto consider = [&run](const Candidate& c) { return consider_candidate(run, c); };
   // The base plans' scores, for the runner-up below.
   std::vector<std::pair<double, size_t>> base_scores;
   for (size_t i = 0; i < plans.size(); ++i) {
@@ -1334,15 +1338,17 @@ void choose_layout(Run& run, const std::vector<Candidate>& plans) {
   // reconstruction is closest to the source over the surface), with the unreshaped charts'
   // texels copied and with them solved too: a copy at a fractional scale can blur edges a
   // fit keeps (MultiUVTest at half the texels: q 0.0040 copied, 0.0020 solved). Each is
-  // kept only if it scores better.
+  // kept only if it scores better. Where no unit keeps its shape (the demo's and Fox's kept
+  // layouts reshape every chart) there is nothing to copy: the second is the first again.
   if (scorer && o.least_squares_bake && o.max_gmsd <= 0) {
     const Candidate kept = chosen_plan;
+    size_t unreshaped = 0;
     for (bool exact : {true, false}) {
-      if (!exact && !o.exact_texels) break;  // the same as the first
+      if (!exact && (!o.exact_texels || unreshaped == 0)) break;  // the same as the first
       Candidate c = kept;
       c.name += exact ? "+least-squares" : "+least-squares-resampled";
       c.bake = Candidate::Bake::LeastSquares, c.exact = exact;
-      consider(c);
+      unreshaped = consider(c);
     }
   }
   // The kept layout once more with gutters a mip level cleaner. Which costs less on screen,

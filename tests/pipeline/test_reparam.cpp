@@ -391,6 +391,13 @@ TEST_CASE("reparam on the demo asset at half the texels beats the plain resize b
   CHECK(floor > 0);
   CHECK(q_written == Approx(report["guard"]["q_reparam"].get<double>()).epsilon(1e-9));
   CHECK(q_written < q_resize - floor);
+  // The kept plan reshapes the demo's one chart: its least-squares variant is built once,
+  // not again as `-resampled` (with no texels to copy, the same build).
+  const std::string kept = report["layout"].get<std::string>();
+  const std::string base = kept.substr(0, kept.find('+'));
+  CHECK(report["layouts"][0]["exact_units"] == 0);
+  CHECK(candidate_score(report, base + "+least-squares").first > 0);
+  CHECK(candidate_score(report, base + "+least-squares-resampled").first == -1.0);
 }
 
 TEST_CASE("reparam on Duck at half the texels: gutters a mip level cleaner win, and the written file beats the resize",
@@ -426,6 +433,17 @@ TEST_CASE("reparam on Duck at half the texels: gutters a mip level cleaner win, 
   const double q_written = eval::score_as_written(run.in, run.out, *engine, eo).q;
   CHECK(q_written == Approx(q_wide).epsilon(1e-9));
   CHECK(q_written < report["guard"]["q_resize"].get<double>());
+  // Duck's plans keep every chart's shape and copy its texels, so the best plan's
+  // least-squares variant is also built with them resampled (which differs).
+  std::string lsq;
+  for (const auto& c : report["candidates"]) {
+    const std::string name = c["name"];
+    if (name.size() > 14 && name.substr(name.size() - 14) == "+least-squares") lsq = name;
+  }
+  REQUIRE(!lsq.empty());
+  const double q_copied = candidate_score(report, lsq).first, q_resampled = candidate_score(report, lsq + "-resampled").first;
+  CHECK(q_resampled > 0);
+  CHECK(q_resampled != q_copied);
 }
 
 TEST_CASE("reparam on Duck: units that share texels trade density as wholes and beat the plain repack",
