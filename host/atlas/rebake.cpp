@@ -286,7 +286,7 @@ engine::RebakeTexelsDesc RebakePlan::desc(const RebakeOptions& opt) const {
 }
 
 Image rebake(const Image& source, const std::vector<RebakeMesh>& meshes, const RebakeOptions& opt,
-             engine::Engine& engine, RebakeStats* stats) {
+             engine::Engine& engine, RebakeStats* stats, const std::vector<uint8_t>* only) {
   const RebakePlan plan = plan_rebake(source, meshes, opt);
   const int W = plan.width, H = plan.height, C = plan.channels;
   const bool has_alpha = plan.has_alpha;
@@ -299,11 +299,21 @@ Image rebake(const Image& source, const std::vector<RebakeMesh>& meshes, const R
   const auto& list = plan.tile_list;
   const auto& owner = plan.owner;
 
-  // The footprints, filtered on the engine: straight colour, linear.
-  const engine::RebakeTexelsDesc desc = plan.desc(opt);
+  // The footprints, filtered on the engine: straight colour, linear. With `only`, the
+  // engine sees the texels it marks as the only owned ones.
+  engine::RebakeTexelsDesc desc = plan.desc(opt);
+  std::vector<uint32_t> only_owner;
+  bool any = !only;
+  if (only) {
+    if (only->size() != owner.size()) throw std::invalid_argument("rebake: `only` is not width x height");
+    only_owner.assign(owner.size(), engine::kRebakeNoOwner);
+    for (size_t i = 0; i < owner.size(); ++i)
+      if ((*only)[i]) only_owner[i] = owner[i], any |= owner[i] != engine::kRebakeNoOwner;
+    desc.owner = only_owner.data();
+  }
   std::vector<float> filtered(size_t(W) * H * C, 0.0f);
   const Stopwatch t_sample;
-  engine.rebake_texels(desc, filtered.data());
+  if (any) engine.rebake_texels(desc, filtered.data());
   const double sample_seconds = t_sample.seconds();
 
   Image out;
@@ -313,6 +323,8 @@ Image rebake(const Image& source, const std::vector<RebakeMesh>& meshes, const R
 #pragma omp parallel for schedule(static)
   for (int64_t i = 0; i < int64_t(W) * H; ++i) {
     if (owner[size_t(i)] == engine::kRebakeNoOwner) continue;
+    covered[size_t(i)] = 1;
+    if (only && !(*only)[size_t(i)]) continue;
     const auto& Q = rotation[list[owner[size_t(i)]]];
     const float* f = &filtered[size_t(i) * C];
     float* o = &out.pixels[size_t(i) * C];
@@ -339,7 +351,6 @@ Image rebake(const Image& source, const std::vector<RebakeMesh>& meshes, const R
       }
       if (has_alpha) o[alpha] = std::clamp(f[alpha], 0.0f, 1.0f);
     }
-    covered[size_t(i)] = 1;
   }
 
   size_t count = 0;

@@ -60,7 +60,9 @@ struct RebakeStats {
 };
 
 // Same channel count and bit depth as `source`. Throws std::invalid_argument for an empty
-// source or zero size.
+// source or zero size. `only`, when given (width * height): only the texels it marks are
+// filtered; the other covered texels are 0, yet covered (rebake_lanczos, which replaces
+// them, asks for the few it keeps).
 //
 // The host sets up and bins the triangles, picks owners, converts colour, rotates normals
 // and fills gutters; the per-texel sampling runs on `engine` (engine::Engine::rebake_texels;
@@ -68,7 +70,7 @@ struct RebakeStats {
 // gives the same coverage; texels agree to fp32 rounding (the Vulkan kernel works in fp32 in
 // per-tile frames: see tests/atlas/test_rebake_engine.cpp for the stated tolerances).
 Image rebake(const Image& source, const std::vector<RebakeMesh>& meshes, const RebakeOptions& options,
-             engine::Engine& engine, RebakeStats* stats = nullptr);
+             engine::Engine& engine, RebakeStats* stats = nullptr, const std::vector<uint8_t>* only = nullptr);
 
 // sRGB transfer functions (IEC 61966-2-1), exposed for tests and callers.
 float srgb_to_linear(float v);

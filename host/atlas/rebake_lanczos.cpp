@@ -156,16 +156,17 @@ std::vector<uint32_t> extend_owners(const std::vector<uint32_t>& owner, int W, i
 
 }  // namespace
 
-Image rebake_lanczos(const Image& source, const std::vector<RebakeMesh>& meshes, const RebakeOptions& options,
-                     const Image& area, std::vector<uint8_t>* baked) {
-  if (options.role == RebakeRole::Normal) return area;
-  RebakeOptions stored = options;
-  stored.role = RebakeRole::Data;  // the plan's geometry only: values are read as stored
-  const RebakePlan plan = plan_rebake(source, meshes, stored);
+namespace {
+
+// The Lanczos bake of every texel it can bake, into `out` (the new image's size), whose
+// other texels stay as they are. covered: 1 for chart texels and the surround texels
+// written. kept: 1 for chart texels not written (they keep the area bake's value).
+void lanczos_pass(const Image& source, const RebakePlan& plan, const RebakeOptions& options, Image& out,
+                  std::vector<uint8_t>& covered, std::vector<uint8_t>& kept) {
   const int W = plan.width, H = plan.height, C = int(source.channels);
   const int SW = int(source.width), SH = int(source.height);
-  Image out = area;
-  std::vector<uint8_t> covered(size_t(W) * H, 0);
+  covered.assign(size_t(W) * H, 0);
+  kept.assign(size_t(W) * H, 0);
   const SourceCharts charts = source_charts(plan, SW, SH);
   const std::vector<uint32_t> owners = options.surround > 0 ? extend_owners(plan.owner, W, H, options.surround) : plan.owner;
 #pragma omp parallel for schedule(dynamic, 4)
@@ -177,7 +178,8 @@ Image rebake_lanczos(const Image& source, const std::vector<RebakeMesh>& meshes,
       const int32_t chart = charts.chart_of_triangle[plan.tile_list[own]];
       // Chart texels count as baked even where the area bake's value stays; surround texels
       // only once this bake writes them (else the gutter fill takes them).
-      if (plan.owner[size_t(y) * W + x] != engine::kRebakeNoOwner) covered[size_t(y) * W + x] = 1;
+      const bool chart_texel = plan.owner[size_t(y) * W + x] != engine::kRebakeNoOwner;
+      if (chart_texel) covered[size_t(y) * W + x] = 1, kept[size_t(y) * W + x] = 1;
       // The texel centre's preimage, and the kernel's frame: M = V min(S^-1, 1) U^T.
       const double cx = x + 0.5 - t.n[0][0], cy = y + 0.5 - t.n[0][1];
       const double ox = t.o0[0] + t.J[0][0] * cx + t.J[0][1] * cy;
@@ -233,12 +235,66 @@ Image rebake_lanczos(const Image& source, const std::vector<RebakeMesh>& meshes,
       if (!(wsum > 1e-6)) continue;
       float* o = &out.pixels[(size_t(y) * W + x) * C];
       for (int ch = 0; ch < C; ++ch) o[ch] = float(std::clamp(acc[ch] / wsum, 0.0, 1.0));
-      covered[size_t(y) * W + x] = 1;
+      covered[size_t(y) * W + x] = 1, kept[size_t(y) * W + x] = 0;
     }
+}
+
+RebakePlan stored_plan(const Image& source, const std::vector<RebakeMesh>& meshes, const RebakeOptions& options) {
+  RebakeOptions stored = options;
+  stored.role = RebakeRole::Data;  // the plan's geometry only: values are read as stored
+  return plan_rebake(source, meshes, stored);
+}
+
+}  // namespace
+
+Image rebake_lanczos(const Image& source, const std::vector<RebakeMesh>& meshes, const RebakeOptions& options,
+                     const Image& area, std::vector<uint8_t>* baked) {
+  if (options.role == RebakeRole::Normal) return area;
+  const RebakePlan plan = stored_plan(source, meshes, options);
+  Image out = area;
+  std::vector<uint8_t> covered, kept;
+  lanczos_pass(source, plan, options, out, covered, kept);
   if (options.fill_gutter) fill_gutter(out, covered, options.role == RebakeRole::Color);
   if (baked) {
     baked->resize(covered.size(), 0);
     for (size_t i = 0; i < covered.size(); ++i) (*baked)[i] |= covered[i];
+  }
+  return out;
+}
+
+Image rebake_lanczos(const Image& source, const std::vector<RebakeMesh>& meshes, const RebakeOptions& options,
+                     engine::Engine& engine, RebakeStats* stats) {
+  // Normal maps are the area bake; without the gutter fill, gutters keep its values too.
+  if (options.role == RebakeRole::Normal || !options.fill_gutter) {
+    const Image area = rebake(source, meshes, options, engine, stats);
+    return rebake_lanczos(source, meshes, options, area, stats ? &stats->coverage : nullptr);
+  }
+  const RebakePlan plan = stored_plan(source, meshes, options);
+  Image out;
+  out.width = options.width, out.height = options.height, out.channels = source.channels, out.bits = source.bits;
+  out.pixels.assign(size_t(plan.width) * plan.height * source.channels, 0.0f);
+  std::vector<uint8_t> covered, kept;
+  lanczos_pass(source, plan, options, out, covered, kept);
+  // The area bake of the texels the Lanczos pass left (squeezed or degenerate maps), if any:
+  // the same values as with the area bake made first for every texel.
+  RebakeStats area_stats;
+  if (std::find(kept.begin(), kept.end(), 1) != kept.end()) {
+    RebakeOptions area_options = options;
+    area_options.fill_gutter = false;
+    const Image area = rebake(source, meshes, area_options, engine, &area_stats, &kept);
+    const size_t C = source.channels;
+    for (size_t i = 0; i < kept.size(); ++i)
+      if (kept[i]) std::copy_n(&area.pixels[i * C], C, &out.pixels[i * C]);
+  } else {
+    area_stats.triangles = plan.triangles.size();
+    area_stats.coverage.assign(covered.size(), 0);
+    for (size_t i = 0; i < covered.size(); ++i) area_stats.coverage[i] = plan.owner[i] != engine::kRebakeNoOwner;
+    area_stats.covered = size_t(std::count(area_stats.coverage.begin(), area_stats.coverage.end(), 1));
+  }
+  fill_gutter(out, covered, options.role == RebakeRole::Color);
+  if (stats) {
+    *stats = std::move(area_stats);
+    for (size_t i = 0; i < covered.size(); ++i) stats->coverage[i] |= covered[i];
   }
   return out;
 }

@@ -845,10 +845,10 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
                           ro.role != atlas::RebakeRole::Normal;
       const bool all_copied = copies && std::find(unit_exact.begin(), unit_exact.end(), 0) == unit_exact.end();
       atlas::RebakeStats coverage;
-      Image baked = atlas::rebake(source, meshes, ro, engine, &coverage);
       // The least-squares bake starts from the Lanczos one and keeps its surround (the
       // solve itself only reaches one texel past each chart).
-      if (!all_copied) baked = atlas::rebake_lanczos(source, meshes, ro, baked, &coverage.coverage);
+      Image baked = all_copied ? atlas::rebake(source, meshes, ro, engine, &coverage)
+                               : atlas::rebake_lanczos(source, meshes, ro, engine, &coverage);
       if (cand.bake == Candidate::Bake::LeastSquares && ro.role != atlas::RebakeRole::Normal) {
         atlas::LsqBakeStats lsq;
         baked = atlas::rebake_least_squares(source, meshes, ro, baked, &lsq, {}, &coverage.coverage);
