@@ -51,7 +51,8 @@ constexpr double kMaxShrink = 3;
 // (4 sin calls a tap were ~60 % of this bake's time). Over a kernel's at most ~30 steps the
 // recurrence drifts by a few ulps of double, far below the float result's rounding.
 struct Step {
-  double ds, dc;  // sin and cos of the step
+  double ds = 0, dc = 1;  // sin and cos of the step
+  Step() = default;
   explicit Step(double step) : ds(std::sin(step)), dc(std::cos(step)) {}
 };
 struct Phasor {
@@ -158,6 +159,50 @@ std::vector<uint32_t> extend_owners(const std::vector<uint32_t>& owner, int W, i
 
 namespace {
 
+// What a triangle's texels share: the kernel's frame M = V min(S^-1, 1) U^T from the SVD
+// of its map J = U S V^T, the support's radius in source texels, and the steps of the
+// kernel's angles per source column and row (per texel only the first tap's angles are
+// new). ok: the map is neither degenerate nor squeezed past kMaxShrink.
+struct TriangleKernel {
+  bool ok = false;
+  double M[2][2] = {{0, 0}, {0, 0}};
+  double radius = 0;
+  Step rx1, rx3, ry1, ry3, cx1, cx3, cy1, cy3;
+};
+
+std::vector<TriangleKernel> triangle_kernels(const RebakePlan& plan) {
+  std::vector<TriangleKernel> kernels(plan.triangles.size());
+  for (size_t i = 0; i < kernels.size(); ++i) {
+    const engine::RebakeTriangle& t = plan.triangles[i];
+    TriangleKernel& K = kernels[i];
+    // SVD of the 2x2 J through its polar-like decomposition: J^T J = V S^2 V^T.
+    const double a = t.J[0][0], b = t.J[0][1], c = t.J[1][0], d = t.J[1][1];
+    const double p = a * a + c * c, q = a * b + c * d, r = b * b + d * d;
+    const double mean = 0.5 * (p + r), dev = std::sqrt(std::max(0.0, 0.25 * (p - r) * (p - r) + q * q));
+    const double s1 = std::sqrt(mean + dev), s2 = std::sqrt(std::max(0.0, mean - dev));
+    const double theta = 0.5 * std::atan2(2 * q, p - r);  // V's first column angle
+    const double v1[2] = {std::cos(theta), std::sin(theta)}, v2[2] = {-v1[1], v1[0]};
+    if (!(s2 > 1e-12) || s1 > kMaxShrink) continue;
+    // U columns: J v / s; M = sum_k v_k min(1/s_k, 1) u_k^T.
+    const double sk[2] = {s1, s2};
+    const double* vk[2] = {v1, v2};
+    auto& M = K.M;
+    for (int k = 0; k < 2; ++k) {
+      const double u[2] = {(a * vk[k][0] + b * vk[k][1]) / sk[k], (c * vk[k][0] + d * vk[k][1]) / sk[k]};
+      const double f = std::min(1.0 / sk[k], 1.0);
+      for (int i2 = 0; i2 < 2; ++i2)
+        for (int j = 0; j < 2; ++j) M[i2][j] += vk[k][i2] * f * u[j];
+    }
+    K.ok = true;
+    K.radius = 3 * std::max(s1, 1.0) + 1;
+    K.rx1 = Step(M_PI * M[0][1]), K.rx3 = Step(M_PI * M[0][1] / 3);
+    K.ry1 = Step(M_PI * M[1][1]), K.ry3 = Step(M_PI * M[1][1] / 3);
+    K.cx1 = Step(M_PI * M[0][0]), K.cx3 = Step(M_PI * M[0][0] / 3);
+    K.cy1 = Step(M_PI * M[1][0]), K.cy3 = Step(M_PI * M[1][0] / 3);
+  }
+  return kernels;
+}
+
 // The Lanczos bake of every texel it can bake, into `out` (the new image's size), whose
 // other texels stay as they are. covered: 1 for chart texels and the surround texels
 // written. kept: 1 for chart texels not written (they keep the area bake's value).
@@ -169,6 +214,7 @@ void lanczos_pass(const Image& source, const RebakePlan& plan, const RebakeOptio
   kept.assign(size_t(W) * H, 0);
   const SourceCharts charts = source_charts(plan, SW, SH);
   const std::vector<uint32_t> owners = options.surround > 0 ? extend_owners(plan.owner, W, H, options.surround) : plan.owner;
+  const std::vector<TriangleKernel> kernels = triangle_kernels(plan);
 #pragma omp parallel for schedule(dynamic, 4)
   for (int y = 0; y < H; ++y)
     for (int x = 0; x < W; ++x) {
@@ -180,42 +226,23 @@ void lanczos_pass(const Image& source, const RebakePlan& plan, const RebakeOptio
       // only once this bake writes them (else the gutter fill takes them).
       const bool chart_texel = plan.owner[size_t(y) * W + x] != engine::kRebakeNoOwner;
       if (chart_texel) covered[size_t(y) * W + x] = 1, kept[size_t(y) * W + x] = 1;
-      // The texel centre's preimage, and the kernel's frame: M = V min(S^-1, 1) U^T.
+      // The texel centre's preimage.
       const double cx = x + 0.5 - t.n[0][0], cy = y + 0.5 - t.n[0][1];
       const double ox = t.o0[0] + t.J[0][0] * cx + t.J[0][1] * cy;
       const double oy = t.o0[1] + t.J[1][0] * cx + t.J[1][1] * cy;
-      // SVD of the 2x2 J through its polar-like decomposition: J^T J = V S^2 V^T.
-      const double a = t.J[0][0], b = t.J[0][1], c = t.J[1][0], d = t.J[1][1];
-      const double p = a * a + c * c, q = a * b + c * d, r = b * b + d * d;
-      const double mean = 0.5 * (p + r), dev = std::sqrt(std::max(0.0, 0.25 * (p - r) * (p - r) + q * q));
-      const double s1 = std::sqrt(mean + dev), s2 = std::sqrt(std::max(0.0, mean - dev));
-      const double theta = 0.5 * std::atan2(2 * q, p - r);  // V's first column angle
-      const double v1[2] = {std::cos(theta), std::sin(theta)}, v2[2] = {-v1[1], v1[0]};
-      double M[2][2] = {{0, 0}, {0, 0}};
-      bool ok = s2 > 1e-12;
-      if (ok) {
-        // U columns: J v / s; M = sum_k v_k min(1/s_k, 1) u_k^T.
-        const double sk[2] = {s1, s2};
-        const double* vk[2] = {v1, v2};
-        for (int k = 0; k < 2; ++k) {
-          const double u[2] = {(a * vk[k][0] + b * vk[k][1]) / sk[k], (c * vk[k][0] + d * vk[k][1]) / sk[k]};
-          const double f = std::min(1.0 / sk[k], 1.0);
-          for (int i = 0; i < 2; ++i)
-            for (int j = 0; j < 2; ++j) M[i][j] += vk[k][i] * f * u[j];
-        }
-      }
-      if (!ok) continue;  // a degenerate map: the area bake's value stays
-      if (s1 > kMaxShrink) continue;  // squeezed hard: the area bake's value stays (see the header)
-      const double radius = 3 * std::max(s1, 1.0) + 1;
+      const TriangleKernel& K = kernels[plan.tile_list[own]];
+      if (!K.ok) continue;  // degenerate or squeezed hard: the area bake's value stays (see the header)
+      const auto& M = K.M;
+      const double radius = K.radius;
       const int x0 = int(std::floor(ox - radius)), x1 = int(std::ceil(ox + radius));
       const int y0 = int(std::floor(oy - radius)), y1 = int(std::ceil(oy + radius));
       double acc[4] = {0, 0, 0, 0}, wsum = 0;
       // Kernel coordinates (kx, ky) = M (d), d = tap - preimage: +M(1,0) per column, +M(0,1) per row.
       const double dx0 = x0 + 0.5 - ox, dy0 = y0 + 0.5 - oy;
       const double kx0 = M[0][0] * dx0 + M[0][1] * dy0, ky0 = M[1][0] * dx0 + M[1][1] * dy0;
-      Phasor rx1(M_PI * kx0, M_PI * M[0][1]), rx3(M_PI * kx0 / 3, M_PI * M[0][1] / 3);
-      Phasor ry1(M_PI * ky0, M_PI * M[1][1]), ry3(M_PI * ky0 / 3, M_PI * M[1][1] / 3);
-      const Step cx1(M_PI * M[0][0]), cx3(M_PI * M[0][0] / 3), cy1(M_PI * M[1][0]), cy3(M_PI * M[1][0] / 3);
+      Phasor rx1(std::sin(M_PI * kx0), std::cos(M_PI * kx0), K.rx1), rx3(std::sin(M_PI * kx0 / 3), std::cos(M_PI * kx0 / 3), K.rx3);
+      Phasor ry1(std::sin(M_PI * ky0), std::cos(M_PI * ky0), K.ry1), ry3(std::sin(M_PI * ky0 / 3), std::cos(M_PI * ky0 / 3), K.ry3);
+      const Step &cx1 = K.cx1, &cx3 = K.cx3, &cy1 = K.cy1, &cy3 = K.cy3;
       for (int sy = y0; sy <= y1; ++sy, rx1.advance(), rx3.advance(), ry1.advance(), ry3.advance()) {
         // Along the row from its first tap: the row's angles, the column steps.
         Phasor px1(rx1.s, rx1.c, cx1), px3(rx3.s, rx3.c, cx3), py1(ry1.s, ry1.c, cy1), py3(ry3.s, ry3.c, cy3);
