@@ -302,22 +302,16 @@ Image rebake_lanczos(const Image& source, const std::vector<RebakeMesh>& meshes,
   out.pixels.assign(size_t(plan.width) * plan.height * source.channels, 0.0f);
   std::vector<uint8_t> covered, kept;
   lanczos_pass(source, plan, options, out, covered, kept);
-  // The area bake of the texels the Lanczos pass left (squeezed or degenerate maps), if any:
-  // the same values as with the area bake made first for every texel.
+  // The area bake of the texels the Lanczos pass left (squeezed or degenerate maps; the
+  // engine is not called when there are none): the values the area bake made first for
+  // every texel would have given them.
+  RebakeOptions area_options = options;
+  area_options.fill_gutter = false;
   RebakeStats area_stats;
-  if (std::find(kept.begin(), kept.end(), 1) != kept.end()) {
-    RebakeOptions area_options = options;
-    area_options.fill_gutter = false;
-    const Image area = rebake(source, meshes, area_options, engine, &area_stats, &kept);
-    const size_t C = source.channels;
-    for (size_t i = 0; i < kept.size(); ++i)
-      if (kept[i]) std::copy_n(&area.pixels[i * C], C, &out.pixels[i * C]);
-  } else {
-    area_stats.triangles = plan.triangles.size();
-    area_stats.coverage.assign(covered.size(), 0);
-    for (size_t i = 0; i < covered.size(); ++i) area_stats.coverage[i] = plan.owner[i] != engine::kRebakeNoOwner;
-    area_stats.covered = size_t(std::count(area_stats.coverage.begin(), area_stats.coverage.end(), 1));
-  }
+  const Image area = rebake(source, meshes, area_options, engine, &area_stats, &kept);
+  const size_t C = source.channels;
+  for (size_t i = 0; i < kept.size(); ++i)
+    if (kept[i]) std::copy_n(&area.pixels[i * C], C, &out.pixels[i * C]);
   fill_gutter(out, covered, options.role == RebakeRole::Color);
   if (stats) {
     *stats = std::move(area_stats);
