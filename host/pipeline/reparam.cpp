@@ -57,7 +57,7 @@ struct Layout {
 // eps (the rest are kept at the identity, with the identity's measured loss), whether the
 // views resolved the source texels, and how far the targets shrink (lambda1 lambda2).
 struct TriangleCounts {
-  size_t optimized = 0, feasible = 0, resolved = 0, sampled = 0, coarsened = 0;
+  size_t optimized = 0, feasible = 0, resolved = 0, sampled = 0, coarsened = 0, evaluations = 0;
   std::vector<double> infeasible_identity_gmsd, lambda_area;
   std::vector<double> rate_epsilons;  // per triangle under rate control (empty: the fixed epsilon)
 
@@ -69,6 +69,7 @@ struct TriangleCounts {
           {quantile(rate_epsilons, 0.25), quantile(rate_epsilons, 0.5), quantile(rate_epsilons, 0.75)},
           quantile(rate_epsilons, 1.0)};
     r.evaluations = t.evaluations;
+    r.evaluations_mean = optimized ? double(evaluations) / double(optimized) : 0.0;
     r.early_stop = t.early_stop;
     r.view_size = t.view_size;
     r.triangles = optimized;
@@ -1065,6 +1066,7 @@ void run_triangle_stage(Run& run, size_t li, const Layout& L, Prepared& P, const
       for (size_t k = 0; k < results.size(); ++k) {
         const auto& r = results[k];
         tri.optimized += 1;
+        tri.evaluations += size_t(r.evaluations);
         tri.feasible += r.feasible;
         if (!r.feasible) tri.infeasible_identity_gmsd.push_back(r.identity_gmsd);
         tri.resolved += r.texels_per_pixel <= 1.0 + 1e-6;

@@ -28,7 +28,7 @@ namespace uvpress::pipeline {
 // Which algorithm wrote an output: raised by every change that changes reparam's outputs
 // for the same input and options (layouts, bakes, gutters, encoders), so that a resumed
 // batch redoes what an older algorithm wrote (batch compares it with the options).
-constexpr int kReparamRevision = 9;  // 2: image-edge gutters by sampler, surround in gutters; 3: equal-slope candidates, least squares keeps the surround; 4: the wide-gutter variant; 5: normal-mapped assets scored lit (candidates, guard); 6: the unit-scale candidate, wide gutters for the best other plan too; 7: scoring views rolled to the asset and capped at 2560 where the cap binds (the truck); 8: below half the texels, the allocating plans also with the half's allocation; 9: the view bake's CG stops on its render error (triangle-stage scores move by ~1e-5)
+constexpr int kReparamRevision = 10;  // 2: image-edge gutters by sampler, surround in gutters; 3: equal-slope candidates, least squares keeps the surround; 4: the wide-gutter variant; 5: normal-mapped assets scored lit (candidates, guard); 6: the unit-scale candidate, wide gutters for the best other plan too; 7: scoring views rolled to the asset and capped at 2560 where the cap binds (the truck); 8: below half the texels, the allocating plans also with the half's allocation; 9: the view bake's CG stops on its render error (triangle-stage scores move by ~1e-5); 10: the triangle stage stops stalled searches by default
 
 struct ReparamOptions {
   double cost = 0.5;       // relative pixel cost c_r of the new textures vs the old (eq. 20-21)
@@ -166,7 +166,8 @@ struct TriangleStageReport {
     double max = 0;
   };
   std::optional<RateControl> rate_control;
-  int evaluations = 0;     // per triangle
+  int evaluations = 0;     // per triangle: the cap
+  double evaluations_mean = 0;  // spent per triangle (below the cap where early_stop ended searches)
   bool early_stop = false;
   uint32_t view_size = 0;  // pixels a view side
   size_t triangles = 0;    // through the triangle stage

@@ -16,6 +16,7 @@ json triangle_stage_json(const TriangleStageReport& t) {
            {"max", t.rate_control->max}};
   json j = {{"epsilon", eps},
             {"evaluations", t.evaluations},
+            {"evaluations_mean", t.evaluations_mean},
             {"early_stop", t.early_stop},
             {"view_size", t.view_size},
             {"triangles", t.triangles},

@@ -6,7 +6,7 @@
 // skipped so that the layout reparam built is what is checked (where the guard writes the
 // resize, the output is the resize and passes trivially). The default suite runs the
 // corrupted outputs (the comparison must catch them, the resize must pass against itself);
-// UVPRESS_CLIENT_FULL=1 adds the demo asset (`--evaluations 30 --early-stop`), Duck, Fox and
+// UVPRESS_CLIENT_FULL=1 adds the demo asset (`--evaluations 30`), Duck, Fox and
 // CesiumMilkTruck (reparam at its defaults). Every asset check fails today: see each test.
 // Renders and figures are kept in build/client-check/<asset>/ (render.png: rows input,
 // output, resize, coverage mask; figures.json).
@@ -98,7 +98,7 @@ Checked check_asset(const std::string& name, const test::fs::path& input) {
   const test::fs::path keep = artifacts(name);
   const auto in = dir / "input.glb", out = dir / "output.glb";
   to_glb(input, in);
-  const std::string settings = full_run() ? "" : " --evaluations 30 --early-stop";
+  const std::string settings = full_run() ? "" : " --evaluations 30";
   auto r = test::run_uvpress("reparam '" + in.string() + "' -o '" + out.string() + "' --cost 0.5 --force-reparam" +
                              settings + " --report '" + (keep / "reparam.json").string() + "'");
   INFO(r.err);

@@ -100,7 +100,8 @@ void add_batch(CLI::App& app, Globals& g) {
       ->each([a](const std::string&) { a->o.reparam.rate_control = false; });
   cmd->add_option("--evaluations", o.reparam.triangle.evaluations, "GP-BO evaluations per triangle")->capture_default_str()->check(CLI::Range(11, 1000));
   cmd->add_option("--view-size", o.reparam.triangle.view_size, "Per-triangle view size in pixels")->capture_default_str()->check(CLI::IsMember({16u, 32u, 48u, 64u}));
-  cmd->add_flag("--early-stop", o.reparam.triangle.early_stop, "Stop a triangle's search once it stalls");
+  cmd->add_flag("--early-stop,!--no-early-stop", o.reparam.triangle.early_stop,
+                "Stop a triangle's search once it stalls (the default); --no-early-stop spends all --evaluations");
   cmd->add_option("--seed", o.reparam.triangle.seed, "Seed of the Bayesian optimization")->capture_default_str();
   cmd->add_flag("--no-optimize", a->no_optimize, "Keep every triangle's shape: only repack and re-bake");
   cmd->add_flag("--force-reparam", [a](int64_t) { a->o.reparam.guard = false; },

@@ -53,7 +53,8 @@ void add_bench_quality(CLI::App& bench, Globals& g) {
   cmd->add_option("--shared", a->shared, "Folder of the shared sample assets")->capture_default_str();
   cmd->add_option("--cost", a->reparam.cost, "reparam --cost")->capture_default_str()->check(CLI::Range(0.001, 1.0));
   cmd->add_option("--evaluations", a->reparam.triangle.evaluations, "reparam --evaluations")->capture_default_str()->check(CLI::Range(11, 1000));
-  cmd->add_flag("--early-stop", a->reparam.triangle.early_stop, "reparam --early-stop");
+  cmd->add_flag("--early-stop,!--no-early-stop", a->reparam.triangle.early_stop, "reparam --early-stop (the default) or --no-early-stop");
+  cmd->add_option("--seed", a->reparam.triangle.seed, "reparam --seed")->capture_default_str();
   add_view_options(cmd, a->view.resolution, a->view.filter, "--");
   add_shading_option(cmd, a->view.shading, "--");
   add_view_options(cmd, a->reparam.score_resolution, a->reparam.score_filter, "--score-");

@@ -135,11 +135,12 @@ void add_bench_triangles(CLI::App& bench, Globals& g) {
   auto assets = std::make_shared<std::vector<std::string>>(std::vector<std::string>{"demo"});
   auto limit = std::make_shared<uint32_t>(1024);
   auto evaluations = std::make_shared<int>(100);
-  auto early_stop = std::make_shared<bool>(false);
+  auto early_stop = std::make_shared<bool>(perceptual::TriangleStageOptions{}.early_stop);
   cmd->add_option("--asset", *assets, "'demo' or a glTF file (several allowed)")->capture_default_str();
   cmd->add_option("--triangles", *limit, "Triangles per asset over every textured primitive, spread evenly (0: all)")->capture_default_str();
   cmd->add_option("--evaluations", *evaluations, "Evaluations per triangle")->capture_default_str()->check(CLI::Range(11, 1000));
-  cmd->add_flag("--early-stop", *early_stop, "Stop a triangle's search when it stalls (off: reparam's default)");
+  cmd->add_flag("--early-stop,!--no-early-stop", *early_stop,
+                "Stop a triangle's search when it stalls (reparam's default); --no-early-stop spends every evaluation");
   cmd->callback([&g, assets, limit, evaluations, early_stop] {
     g.action = [&g, assets, limit, evaluations, early_stop] {
       bench_triangles(g, *assets, *limit, *evaluations, *early_stop);

@@ -51,7 +51,9 @@ void add_reparam(CLI::App& app, Globals& g) {
                   "Small triangles' views magnify their texels no more than this (0: the paper's bounding-square view)")
       ->capture_default_str()
       ->check(CLI::Range(0.0, 1.0));
-  cmd->add_flag("--early-stop", o->triangle.early_stop, "Stop a triangle's search once it stalls (30+ evaluations, 25 without gain)");
+  cmd->add_flag("--early-stop,!--no-early-stop", o->triangle.early_stop,
+                "Stop a triangle's search once it stalls (40+ evaluations, 30 without gain; the default); "
+                "--no-early-stop spends all --evaluations");
   cmd->add_flag("--no-optimize", *no_optimize, "Keep every triangle's shape: only repack and re-bake");
   cmd->add_flag("--resample-all", [o](int64_t) { o->exact_texels = false; },
                 "Resample every chart, also those that keep their shape (default: their texels are copied)");
