@@ -585,6 +585,19 @@ struct SizeRule {
 
 constexpr uint32_t kMaxSide = 1u << 16;
 
+// The longer side of an atlas of `texels` image texels whose sides are r : 1 (not
+// power-of-two).
+uint32_t longer_side(double texels, double r) { return std::max<uint32_t>(1, uint32_t(std::lround(std::sqrt(texels * r)))); }
+
+// The atlas of `texels` image texels at `aspect` (width / height), sized as
+// choose_at_aspect sizes it for CostMeasure::ImageTexels without pot.
+std::array<uint32_t, 2> image_dims(double aspect, double texels, uint32_t block) {
+  SizeRule rule;
+  rule.aspect = aspect;
+  rule.block = block;
+  return rule.dims(longer_side(texels, aspect >= 1 ? aspect : 1 / aspect));
+}
+
 }  // namespace
 
 namespace {
@@ -648,8 +661,7 @@ Packing choose_at_aspect(const std::vector<ChartShape>& charts, double area1, ui
     }
   } else {
     const double texels = o.cost * double(old_width) * old_height;
-    const double Lf = std::sqrt(texels * r);
-    uint32_t L = o.pot ? rule.nearest_pot(Lf) : std::max<uint32_t>(1, uint32_t(std::lround(Lf)));
+    uint32_t L = o.pot ? rule.nearest_pot(std::sqrt(texels * r)) : longer_side(texels, r);
     auto d = rule.dims(L);
     p = pack_max_scale(charts, d[0], d[1], o.pack, o.s_max);
     if (p.ok && p.scale >= o.s_max) {  // at full density: shrink the atlas to what is needed
@@ -705,6 +717,34 @@ AtlasChoice choose_atlas(const std::vector<ChartShape>& charts, uint32_t old_wid
   for (Packing& p : found)
     if (better(p, best)) best = &p;
   if (!best) return choice;
+  // The shapes between those tried: the bottom-left fill's result jumps by a few points of
+  // efficiency from one shape to the next (measured at half the texels, gutter 4: Duck
+  // 0.69 at the source's square, 0.73 at 1.12:1; the truck 0.74 at its square, 0.76 at
+  // 0.7:1; Fox flat within 1 point), so the steps of 2^(1/4) in between are tried too. A
+  // shape is searched in full only where it holds the charts at 1 % more scale than the
+  // best so far (or, at the source density, in 1 % fewer image texels): one placement
+  // each, on footprints rasterized once, and most shapes stop there.
+  std::vector<Packing> refined;  // outlives `best`
+  if (!o.keep_aspect && !o.pot && o.size == 0 && o.measure == CostMeasure::ImageTexels) {
+    const double best_aspect = aspects[size_t(best - found.data())];
+    const int reach = best_aspect > source * 3 || best_aspect < source / 3 ? 8 : 4;  // 4:1 (1:4) was tried and won
+    std::vector<double> fine;
+    for (int k = -reach; k <= reach; ++k)
+      if (k % 4 != 0) fine.push_back(source * std::exp2(0.25 * k));
+    const bool at_density = best->scale >= o.s_max * (1 - 1e-9);
+    const double probe_scale = at_density ? o.s_max : std::min(o.s_max, best->scale * 1.01);
+    const double texels = at_density ? 0.99 * double(best->width) * best->height : o.cost * double(old_width) * old_height;
+    const Prints probe = rasterize_all(charts, probe_scale, o.pack);
+    refined.resize(fine.size());
+#pragma omp parallel for schedule(dynamic, 1)
+    for (int k = 0; k < int(fine.size()); ++k) {
+      const auto d = image_dims(fine[size_t(k)], texels, std::max<uint32_t>(1, o.pack.block));
+      if (!place(probe, d[0], d[1], o.pack, kStrategies[0]).ok) continue;
+      refined[size_t(k)] = choose_at_aspect(charts, area1, old_width, old_height, old_used_texels, o, fine[size_t(k)]);
+    }
+    for (Packing& p : refined)
+      if (better(p, best)) best = &p;
+  }
   choice.packing = std::move(*best);
   const Packing& q = choice.packing;
   if (old_used_texels > 0) choice.cost_ratio = q.chart_area / old_used_texels;

@@ -435,6 +435,30 @@ TEST_CASE("pack: a long chart gets a long atlas when the aspect is free", "[atla
   CHECK(kept.packing.width == kept.packing.height);
 }
 
+TEST_CASE("pack: a shape between the source's and 2:1 when the charts want it", "[atlas]") {
+  // A 480 x 400 chart (6:5) from a 512 x 512 source at a quarter of its texels (65,536):
+  // the square atlas (256 x 256) holds it at scale (256 - 8) / 480 = 0.517, a 2^(1/4):1
+  // one (279 x 235) at min(271 / 480, 227 / 400) = 0.565, 2:1 (362 x 181) at 0.433.
+  const std::vector<ChartShape> charts = {rect(0, 0, 480, 400)};
+  atlas::BudgetOptions o;
+  o.measure = atlas::CostMeasure::ImageTexels;
+  o.cost = 0.25;
+  o.keep_aspect = true;
+  const auto square = atlas::choose_atlas(charts, 512, 512, 0, o);
+  REQUIRE(square.packing.ok);
+  CHECK(square.packing.width == 256);
+  CHECK(square.packing.scale == Approx(248.0 / 480).epsilon(2e-3));
+  o.keep_aspect = false;
+  const auto free = atlas::choose_atlas(charts, 512, 512, 0, o);
+  REQUIRE(free.packing.ok);
+  INFO("free " << free.packing.width << "x" << free.packing.height << " scale " << free.packing.scale);
+  // Either way round: the chart may take a quarter turn.
+  CHECK(std::max(free.packing.width, free.packing.height) == 279);
+  CHECK(std::min(free.packing.width, free.packing.height) == 235);
+  CHECK(free.packing.scale == Approx(271.0 / 480).epsilon(2e-3));
+  CHECK(free.texel_ratio <= 0.25 * 1.01);  // the same budget
+}
+
 TEST_CASE("pack: the same packing on any thread count", "[atlas]") {
   const auto charts = random_charts(40, 5);
   atlas::BudgetOptions o;
