@@ -108,8 +108,10 @@ struct BudgetOptions {
   uint32_t size = 0;    // --size N: the atlas's longer side is N (the budget is ignored)
   bool pot = false;     // power-of-two sides
   // true: the source's aspect ratio. false: also 2:1 and 1:2 of it (then 4:1 or 1:4 where
-  // that direction won), keeping another shape only when it gives 1 % more scale or 1 %
-  // fewer image texels: a long chart then gets a long atlas.
+  // that direction won), and for ImageTexels without pot the shapes in steps of 2^(1/4)
+  // between them, keeping another shape only when it gives 1 % more scale or 1 % fewer
+  // image texels: a long chart then gets a long atlas, and a set of charts the shape that
+  // the packer fills best.
   bool keep_aspect = true;
   double s_max = 1.0;   // never above the source texel density
   PackOptions pack;

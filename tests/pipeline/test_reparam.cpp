@@ -493,7 +493,7 @@ TEST_CASE("reparam's own curve chooses plan and gutter at each cost: Duck at a t
   // of Duck's texels (repack, wide gutter) is not the best at a tenth: built there it scored
   // q 0.00179 against the resize's 0.00155, and Duck's ratio went above 1. At each cost the
   // curve takes the best of the plans reparam chose among (the kept one and the best other
-  // base plan, each at both gutters), so at a tenth it beats the resize by more than eval's
+  // base plan, each at both gutters, and the second-best other), so at a tenth it beats the resize by more than eval's
   // noise floor, and it is never worse at the requested cost than the kept layout itself.
   if (!test::shared_dir()) UVPRESS_SKIP("../shared is absent");
   auto engine = engine::make_cpu_engine({});
