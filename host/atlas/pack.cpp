@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <deque>
 #include <limits>
 #include <numeric>
 
@@ -718,33 +719,51 @@ AtlasChoice choose_atlas(const std::vector<ChartShape>& charts, uint32_t old_wid
     if (better(p, best)) best = &p;
   if (!best) return choice;
   // The shapes between those tried: the bottom-left fill's result jumps by a few points of
-  // efficiency from one shape to the next, so the steps of 2^(1/4) in between are tried
-  // too (bench pack, own charts at half the texels, gutter 4: Duck 0.67 of a square
-  // filled, 0.74 of a 1.19:1 atlas, scale 0.743 -> 0.780; MultiUVTest 0.37 -> 0.46; Fox
-  // and the truck keep their shapes). A shape is searched in full only where one placement
-  // with the first strategy holds the charts at 1 % more scale than the best so far (or, at
-  // the source density, in 1 % fewer image texels), on footprints rasterized once: most
-  // shapes stop there, and the packing takes about as long as before.
-  std::vector<Packing> refined;  // outlives `best`
+  // efficiency from one shape to the next, so more shapes are tried: the steps of 2^(1/4)
+  // between 1:2 and 2:1 of the source's, the largest chart's own shape (with its gutter)
+  // both ways round, then steps of 2^(1/8) and 2^(1/16) about the best (bench pack, own
+  // charts at half the texels, gutter 4: Duck 0.67 of a square filled, 0.74 of a 1.19:1
+  // atlas, scale 0.743 -> 0.780; MultiUVTest 0.37 -> 0.46; Fox and the truck keep their
+  // shapes). A shape is searched in full only where one placement with the first strategy
+  // holds the charts at 1 % more scale than the best so far (or, at the source density, in
+  // 1 % fewer image texels), on footprints rasterized once per round: most shapes stop
+  // there, and the packing takes about as long as before.
+  std::deque<Packing> tried;  // the refinement's winners; `best` may point here
   if (!o.keep_aspect && !o.pot && o.size == 0 && o.measure == CostMeasure::ImageTexels) {
-    const double best_aspect = aspects[size_t(best - found.data())];
-    const int reach = best_aspect > source * 3 || best_aspect < source / 3 ? 8 : 4;  // 4:1 (1:4) was tried and won
-    std::vector<double> fine;
-    for (int k = -reach; k <= reach; ++k)
-      if (k % 4 != 0) fine.push_back(source * std::exp2(0.25 * k));
-    const bool at_density = best->scale >= o.s_max * (1 - 1e-9);
-    const double probe_scale = at_density ? o.s_max : std::min(o.s_max, best->scale * 1.01);
-    const double texels = at_density ? 0.99 * double(best->width) * best->height : o.cost * double(old_width) * old_height;
-    const Prints probe = rasterize_all(charts, probe_scale, o.pack);
-    refined.resize(fine.size());
+    double best_aspect = aspects[size_t(best - found.data())];
+    const uint32_t block = std::max<uint32_t>(1, o.pack.block);
+    auto try_shapes = [&](const std::vector<double>& shapes) {
+      const bool at_density = best->scale >= o.s_max * (1 - 1e-9);
+      const double probe_scale = at_density ? o.s_max : std::min(o.s_max, best->scale * 1.01);
+      const double texels = at_density ? 0.99 * double(best->width) * best->height : o.cost * double(old_width) * old_height;
+      const Prints probe = rasterize_all(charts, probe_scale, o.pack);
+      std::vector<Packing> round(shapes.size());
 #pragma omp parallel for schedule(dynamic, 1)
-    for (int k = 0; k < int(fine.size()); ++k) {
-      const auto d = image_dims(fine[size_t(k)], texels, std::max<uint32_t>(1, o.pack.block));
-      if (!place(probe, d[0], d[1], o.pack, kStrategies[0]).ok) continue;
-      refined[size_t(k)] = choose_at_aspect(charts, area1, old_width, old_height, old_used_texels, o, fine[size_t(k)]);
+      for (int k = 0; k < int(shapes.size()); ++k) {
+        const auto d = image_dims(shapes[size_t(k)], texels, block);
+        if (!place(probe, d[0], d[1], o.pack, kStrategies[0]).ok) continue;
+        round[size_t(k)] = choose_at_aspect(charts, area1, old_width, old_height, old_used_texels, o, shapes[size_t(k)]);
+      }
+      for (size_t k = 0; k < shapes.size(); ++k)
+        if (better(round[k], best)) tried.push_back(std::move(round[k])), best = &tried.back(), best_aspect = shapes[k];
+    };
+    const int reach = best_aspect > source * 3 || best_aspect < source / 3 ? 8 : 4;  // 4:1 (1:4) was tried and won
+    std::vector<double> shapes;
+    for (int k = -reach; k <= reach; ++k)
+      if (k % 4 != 0) shapes.push_back(source * std::exp2(0.25 * k));
+    {
+      const Prints at_best = rasterize_all(charts, best->scale, o.pack);
+      size_t largest = 0;
+      for (size_t i = 1; i < at_best.prints.size(); ++i)
+        if (at_best.prints[i].count > at_best.prints[largest].count) largest = i;
+      if (!at_best.prints.empty()) {
+        const Footprint& f = at_best.prints[largest];
+        const double own = (double(f.w) * block + o.pack.gutter) / (double(f.h) * block + o.pack.gutter);
+        shapes.push_back(own), shapes.push_back(1 / own);
+      }
     }
-    for (Packing& p : refined)
-      if (better(p, best)) best = &p;
+    try_shapes(shapes);
+    for (const double step : {std::exp2(0.125), std::exp2(0.0625)}) try_shapes({best_aspect / step, best_aspect * step});
   }
   choice.packing = std::move(*best);
   const Packing& q = choice.packing;
