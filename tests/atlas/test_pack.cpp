@@ -457,6 +457,19 @@ TEST_CASE("pack: a shape between the source's and 2:1 when the charts want it", 
   CHECK(std::min(free.packing.width, free.packing.height) == 235);
   CHECK(free.packing.scale == Approx(271.0 / 480).epsilon(2e-3));
   CHECK(free.texel_ratio <= 0.25 * 1.01);  // the same budget
+  // A 436 x 400 chart (1.09:1): the square holds it at 248 / 436 = 0.569, the grid's
+  // 1.19:1 at min(271 / 436, 227 / 400) = 0.568, its own shape (and 2^(1/8):1 about the
+  // square), 267 x 245, at min(259 / 436, 237 / 400) = 0.5925; a step of 2^(1/16) about
+  // it, 267 x 246, at 259 / 436 = 0.594.
+  const std::vector<ChartShape> near_square = {rect(0, 0, 436, 400)};
+  const auto near = atlas::choose_atlas(near_square, 512, 512, 0, o);
+  REQUIRE(near.packing.ok);
+  INFO("near " << near.packing.width << "x" << near.packing.height << " scale " << near.packing.scale);
+  CHECK(std::max(near.packing.width, near.packing.height) == 267);
+  CHECK(std::min(near.packing.width, near.packing.height) >= 245);
+  CHECK(std::min(near.packing.width, near.packing.height) <= 246);
+  CHECK(near.packing.scale >= 0.59);  // the square's 0.569 + 4 %
+  CHECK(near.texel_ratio <= 0.25 * 1.01);
 }
 
 TEST_CASE("pack: the same packing on any thread count", "[atlas]") {
