@@ -718,16 +718,16 @@ AtlasChoice choose_atlas(const std::vector<ChartShape>& charts, uint32_t old_wid
   for (Packing& p : found)
     if (better(p, best)) best = &p;
   if (!best) return choice;
-  // The shapes between those tried: the bottom-left fill's result jumps by a few points of
-  // efficiency from one shape to the next, so more shapes are tried: the steps of 2^(1/4)
-  // between 1:2 and 2:1 of the source's, the largest chart's own shape (with its gutter)
-  // both ways round, then steps of 2^(1/8) and 2^(1/16) about the best (bench pack, own
-  // charts at half the texels, gutter 4: Duck 0.67 of a square filled, 0.74 of a 1.19:1
-  // atlas, scale 0.743 -> 0.780; MultiUVTest 0.37 -> 0.46; Fox and the truck keep their
-  // shapes). A shape is searched in full only where one placement with the first strategy
-  // holds the charts at 1 % more scale than the best so far (or, at the source density, in
-  // 1 % fewer image texels), on footprints rasterized once per round: most shapes stop
-  // there, and the packing takes about as long as before.
+  // More shapes: the bottom-left fill fills some shapes a few points better than their
+  // neighbours, and which ones depends on the charts. Tried: the steps of 2^(1/4) between
+  // 1:2 and 2:1 of the source's (to 1:4, 4:1 where those won), the largest chart's own
+  // shape (with its gutter) both ways round, then steps of 2^(1/8) and 2^(1/16) about the
+  // best. bench pack, own charts at half the texels, gutter 4: Duck's efficiency 0.67 ->
+  // 0.74 (a 1.19:1 atlas, scale 0.743 -> 0.780), MultiUVTest's 0.37 -> 0.49; Fox and the
+  // truck keep their shapes. A shape is searched in full (a bisection on the scale) only
+  // where one placement with the first strategy holds the charts at 1 % more scale than the
+  // best so far (or, at the source density, in 1 % fewer image texels), on footprints
+  // rasterized once per round; most shapes stop there (packing takes 1.2-2x as long).
   std::deque<Packing> tried;  // the refinement's winners; `best` may point here
   if (!o.keep_aspect && !o.pot && o.size == 0 && o.measure == CostMeasure::ImageTexels) {
     double best_aspect = aspects[size_t(best - found.data())];

@@ -108,8 +108,8 @@ struct BudgetOptions {
   uint32_t size = 0;    // --size N: the atlas's longer side is N (the budget is ignored)
   bool pot = false;     // power-of-two sides
   // true: the source's aspect ratio. false: also 2:1 and 1:2 of it (then 4:1 or 1:4 where
-  // that direction won), and for ImageTexels without pot the shapes in steps of 2^(1/4)
-  // between them, keeping another shape only when it gives 1 % more scale or 1 % fewer
+  // that direction won), and for ImageTexels without pot many shapes between them (see
+  // choose_atlas), keeping another shape only when it gives 1 % more scale or 1 % fewer
   // image texels: a long chart then gets a long atlas, and a set of charts the shape that
   // the packer fills best.
   bool keep_aspect = true;
@@ -135,9 +135,13 @@ struct AtlasChoice {
 //    to it (so c_r is only approximate with pot).
 //  - ImageTexels: width * height ~= cost * old_width * old_height, then the largest scale;
 //    when that scale reaches s_max the atlas shrinks to the smallest that still fits.
-// Sides are multiples of the block size. ok = false when nothing fits. The aspect
-// ratios (keep_aspect) are searched independently (in parallel) and compared in a fixed
-// order, so the choice does not depend on the thread count.
+// Sides are multiples of the block size. ok = false when nothing fits. With keep_aspect
+// false: the source's aspect, 2:1 and 1:2 of it (then 4:1 or 1:4), and for ImageTexels
+// without pot also steps of 2^(1/4) between them, the largest chart's own shape and steps
+// of 2^(1/8), 2^(1/16) about the best; a shape is searched in full only where one
+// placement says it may hold the charts at 1 % more scale. Shapes are searched
+// independently (in parallel) and compared in a fixed order, so the choice does not depend
+// on the thread count.
 AtlasChoice choose_atlas(const std::vector<ChartShape>& charts, uint32_t old_width, uint32_t old_height,
                          double old_used_texels, const BudgetOptions& options = {});
 
