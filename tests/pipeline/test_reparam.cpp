@@ -204,15 +204,16 @@ TEST_CASE("reparam's guard writes the plain resize when the layout loses, and re
           "[pipeline][reparam][shared]") {
   if (!test::shared_dir()) UVPRESS_SKIP("../shared is absent");
   auto engine = engine::make_cpu_engine({});
-  // Duck's charts only repacked at half the texels with a 4-texel gutter: its atlas is
-  // already tight, so the repack gets a smaller scale than a resize and is resampled twice:
-  // built to lose (q 0.00027 vs 0.00023; at the mip-safe 8-texel default the repack wins,
-  // 0.00021).
+  // Duck's charts only repacked at half the texels with a 4-texel gutter into an atlas of
+  // the source's (square) shape: its atlas is already tight, so the repack gets a smaller
+  // scale than a resize and is resampled twice: built to lose (q 0.00027 vs 0.00023; at
+  // the mip-safe 8-texel default the repack wins, 0.00021).
   const auto path = *test::shared_dir() / "assets" / "Duck" / "glTF" / "Duck.gltf";
   const io::GltfFile in = io::load_gltf(path.string());
   io::GltfFile out = in, layout;
   pipeline::ReparamOptions losing = keep_shapes(0.5);
   losing.gutter = 4;
+  losing.keep_aspect = true;
   auto report = pipeline::reparam(out, *engine, losing, {}, &layout).to_json();
   INFO(report.dump());
   REQUIRE(report["guard"].is_object());
@@ -316,7 +317,9 @@ TEST_CASE("reparam's gutter at the image edges follows the sampler: none where i
   out = wrapped;
   r = pipeline::reparam(out, *engine, o);
   REQUIRE(r.layouts.size() == 1);
-  CHECK(r.layouts[0].edge_gutter == std::array<uint32_t, 2>{(g + 1) / 2, 0});
+  // Half the gutter of the layout kept (the wide-gutter variant may win here).
+  const uint32_t gw = r.layouts[0].gutter;
+  CHECK(r.layouts[0].edge_gutter == std::array<uint32_t, 2>{(gw + 1) / 2, 0});
   CHECK(r.layouts[0].packing_efficiency < 0.99);
 }
 
@@ -400,16 +403,19 @@ TEST_CASE("reparam on the demo asset at half the texels beats the plain resize b
   CHECK(candidate_score(report, base + "+least-squares-resampled").first == -1.0);
 }
 
-TEST_CASE("reparam on Duck at half the texels: gutters a mip level cleaner win, and the written file beats the resize",
+TEST_CASE("reparam on Duck at half the texels: both gutters built, and the written file is the best of them and the resize",
           "[pipeline][reparam][shared][wide-gutter]") {
   // Issue 17's Duck case. Duck's charts share texels and can only be repacked (or scaled
-  // as whole units, the unit-scale candidate, which scores alike here); at the
-  // mip-safe default (8 texels at 362^2) the repack loses to the resize (q 0.000779 vs
-  // 0.000692) although it keeps more texels (scale 0.733 vs 0.707): where its views sample
-  // coarse mip levels, the repacked charts bleed into each other, while the input's charts
-  // sit in the yellow they continue into on the mesh. With twice the gutter the repack wins.
-  // The margin (about 2.5 %) is below eval's noise floor for Duck (1.4e-4, a fifth of q):
-  // this checks the choice and the written score, not a visible win.
+  // as whole units, the unit-scale candidate); where views sample coarse mip levels the
+  // repacked charts bleed into each other, while the input's charts sit in the yellow they
+  // continue into on the mesh, so the kept plan and the best other are also built with
+  // gutters a mip level cleaner (16 texels instead of 8 at 362^2). Which wins is a matter of
+  // where the packer puts the eye next to the body: the repack in a square atlas at costs
+  // 0.48, 0.50, 0.52, 0.54 scored q 0.000785, 0.000779, 0.00075, 0.00061 at 8 texels and
+  // 0.000969, 0.000675, 0.000739, 0.000742 at 16, and the resize's 0.000692 is inside that
+  // spread (eval's noise floor for Duck is 1.4e-4). So this checks what must hold whatever
+  // the arrangement: both gutters were built and scored, and the file written scores the
+  // best of every candidate and the resize, as the guard said.
   if (!test::shared_dir()) UVPRESS_SKIP("../shared is absent");
   auto engine = engine::make_cpu_engine({});
   pipeline::ReparamOptions o;
@@ -421,18 +427,22 @@ TEST_CASE("reparam on Duck at half the texels: gutters a mip level cleaner win, 
   REQUIRE(report["guard"].is_object());
   const double q_default = candidate_score(report, "repack").first;
   const double q_wide = candidate_score(report, "repack+wide-gutter").first;
-  REQUIRE(q_default > 0);
-  REQUIRE(q_wide > 0);
-  CHECK(q_wide < q_default);
-  CHECK(report["chosen"] == "reparam");
-  CHECK(report["layout"] == "repack+wide-gutter");
+  CHECK(q_default > 0);
+  CHECK(q_wide > 0);
+  CHECK(q_wide != q_default);
+  double q_best = 1;
+  std::string best;
+  for (const auto& c : report["candidates"])
+    if (c["q"].get<double>() >= 0 && c["q"].get<double>() < q_best) q_best = c["q"].get<double>(), best = c["name"];
+  const double q_resize = report["guard"]["q_resize"].get<double>();
   REQUIRE(result.layouts.size() == 1);
-  CHECK(result.layouts[0].gutter == 16);
+  CHECK(result.layouts[0].gutter == (best.find("+wide-gutter") != std::string::npos ? 16u : 8u));
+  CHECK(report["layout"] == best);
+  CHECK(report["chosen"] == (q_best < q_resize ? "reparam" : "resize"));
   eval::EvalOptions eo;
   eo.artifacts = false;
   const double q_written = eval::score_as_written(run.in, run.out, *engine, eo).q;
-  CHECK(q_written == Approx(q_wide).epsilon(1e-9));
-  CHECK(q_written < report["guard"]["q_resize"].get<double>());
+  CHECK(q_written == Approx(std::min(q_best, q_resize)).epsilon(1e-9));
   // Duck's plans keep every chart's shape and copy its texels, so the best plan's
   // least-squares variant is also built with them resampled (which differs).
   std::string lsq;
