@@ -498,20 +498,25 @@ Packing pack_charts(const std::vector<ChartShape>& charts, uint32_t width, uint3
 
 namespace {
 
-// Sum of |triangle areas| of all charts at scale 1 (out-of-range indices skipped).
+// Sum of |triangle areas| of one chart at scale 1 (out-of-range indices skipped).
+double chart_area(const ChartShape& c) {
+  double area = 0;
+  const size_t n = c.points.size() / 2;
+  for (size_t t = 0; t + 2 < c.triangles.size(); t += 3) {
+    const uint32_t i = c.triangles[t], j = c.triangles[t + 1], k = c.triangles[t + 2];
+    if (i >= n || j >= n || k >= n) continue;
+    const double* a = &c.points[2 * i];
+    const double* b = &c.points[2 * j];
+    const double* d = &c.points[2 * k];
+    area += 0.5 * std::abs((b[0] - a[0]) * (d[1] - a[1]) - (b[1] - a[1]) * (d[0] - a[0]));
+  }
+  return area;
+}
+
+// ... of all charts.
 double chart_area(const std::vector<ChartShape>& charts) {
   double area = 0;
-  for (const auto& c : charts) {
-    const size_t n = c.points.size() / 2;
-    for (size_t t = 0; t + 2 < c.triangles.size(); t += 3) {
-      const uint32_t i = c.triangles[t], j = c.triangles[t + 1], k = c.triangles[t + 2];
-      if (i >= n || j >= n || k >= n) continue;
-      const double* a = &c.points[2 * i];
-      const double* b = &c.points[2 * j];
-      const double* d = &c.points[2 * k];
-      area += 0.5 * std::abs((b[0] - a[0]) * (d[1] - a[1]) - (b[1] - a[1]) * (d[0] - a[0]));
-    }
-  }
+  for (const auto& c : charts) area += chart_area(c);
   return area;
 }
 
@@ -732,11 +737,15 @@ AtlasChoice choose_atlas(const std::vector<ChartShape>& charts, uint32_t old_wid
   if (!o.keep_aspect && !o.pot && o.size == 0 && o.measure == CostMeasure::ImageTexels) {
     double best_aspect = aspects[size_t(best - found.data())];
     const uint32_t block = std::max<uint32_t>(1, o.pack.block);
+    Prints probe;  // the footprints at the probe's scale, kept while the best does not change
+    probe.scale = -1;
     auto try_shapes = [&](const std::vector<double>& shapes) {
-      const bool at_density = best->scale >= o.s_max * (1 - 1e-9);
-      const double probe_scale = at_density ? o.s_max : std::min(o.s_max, best->scale * 1.01);
-      const double texels = at_density ? 0.99 * double(best->width) * best->height : o.cost * double(old_width) * old_height;
-      const Prints probe = rasterize_all(charts, probe_scale, o.pack);
+      // Within 1 % of the source density a shape can only win by holding the charts at
+      // that density in 1 % fewer image texels (`better`): the probe asks that instead.
+      const bool capped = best->scale * 1.01 > o.s_max;
+      const double probe_scale = capped ? o.s_max : best->scale * 1.01;
+      const double texels = capped ? 0.99 * double(best->width) * best->height : o.cost * double(old_width) * old_height;
+      if (probe.scale != probe_scale) probe = rasterize_all(charts, probe_scale, o.pack);
       std::vector<Packing> round(shapes.size());
 #pragma omp parallel for schedule(dynamic, 1)
       for (int k = 0; k < int(shapes.size()); ++k) {
@@ -751,16 +760,19 @@ AtlasChoice choose_atlas(const std::vector<ChartShape>& charts, uint32_t old_wid
     std::vector<double> shapes;
     for (int k = -reach; k <= reach; ++k)
       if (k % 4 != 0) shapes.push_back(source * std::exp2(0.25 * k));
-    {
-      const Prints at_best = rasterize_all(charts, best->scale, o.pack);
+    if (!charts.empty()) {  // the largest chart (by area): its box at the best's scale, and the gutter
       size_t largest = 0;
-      for (size_t i = 1; i < at_best.prints.size(); ++i)
-        if (at_best.prints[i].count > at_best.prints[largest].count) largest = i;
-      if (!at_best.prints.empty()) {
-        const Footprint& f = at_best.prints[largest];
-        const double own = (double(f.w) * block + o.pack.gutter) / (double(f.h) * block + o.pack.gutter);
-        shapes.push_back(own), shapes.push_back(1 / own);
+      double largest_area = -1;
+      for (size_t i = 0; i < charts.size(); ++i) {
+        const double a = chart_area(charts[i]);
+        if (a > largest_area) largest_area = a, largest = i;
       }
+      const std::vector<double>& pts = charts[largest].points;
+      double mx = std::numeric_limits<double>::infinity(), my = mx, Mx = -mx, My = -mx;
+      for (size_t i = 0; i + 1 < pts.size(); i += 2)
+        mx = std::min(mx, pts[i]), Mx = std::max(Mx, pts[i]), my = std::min(my, pts[i + 1]), My = std::max(My, pts[i + 1]);
+      const double own = ((Mx - mx) * best->scale + o.pack.gutter) / ((My - my) * best->scale + o.pack.gutter);
+      if (own > 0 && std::isfinite(own)) shapes.push_back(own), shapes.push_back(1 / own);
     }
     try_shapes(shapes);
     for (const double step : {std::exp2(0.125), std::exp2(0.0625)}) try_shapes({best_aspect / step, best_aspect * step});

@@ -487,7 +487,13 @@ UnitScales unit_scales_filling(const Prepared& P, const io::Asset& asset, const 
   budget.pack.edge_x = atlas::edge_gutter(budget.pack.gutter, repeats[0]);
   budget.pack.edge_y = atlas::edge_gutter(budget.pack.gutter, repeats[1]);
   // Whether the units at scales k fit the budget with room to spare (packed at s_max = 1).
+  // The allocation is piecewise constant in its share (losses measured at a few shrinks),
+  // so the bisection asks about the same scales again and again (Fox: 5 of its 12 packings
+  // were repeats): each answer is kept.
+  std::vector<std::pair<std::vector<double>, bool>> answered;
   auto spare = [&](const std::vector<double>& k) {
+    for (const auto& [seen, fits] : answered)
+      if (seen == k) return fits;
     std::vector<atlas::ChartShape> shapes(P.units.size());
     for (size_t u = 0; u < P.units.size(); ++u)
       for (uint32_t c : P.units[u]) {
@@ -496,7 +502,8 @@ UnitScales unit_scales_filling(const Prepared& P, const io::Asset& asset, const 
         for (uint32_t l : P.charts[c].local) shapes[u].triangles.push_back(base + l);
       }
     const atlas::AtlasChoice choice = atlas::choose_atlas(shapes, P.driver.width, P.driver.height, P.old_used, budget);
-    return choice.packing.ok && choice.packing.scale >= 1 - 1e-3;
+    answered.push_back({k, choice.packing.ok && choice.packing.scale >= 1 - 1e-3});
+    return answered.back().second;
   };
   double lo = cand.allocation_share > 0 ? cand.allocation_share : P.requested_share, hi = 1;
   UnitScales best{scales_at(lo), lo};
