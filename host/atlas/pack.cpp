@@ -731,8 +731,9 @@ AtlasChoice choose_atlas(const std::vector<ChartShape>& charts, uint32_t old_wid
   // 0.74 (a 1.19:1 atlas, scale 0.743 -> 0.780), MultiUVTest's 0.37 -> 0.49; Fox and the
   // truck keep their shapes. A shape is searched in full (a bisection on the scale) only
   // where one placement with the first strategy holds the charts at 1 % more scale than the
-  // best so far (or, at the source density, in 1 % fewer image texels), on footprints
-  // rasterized once per round; most shapes stop there (packing takes 1.2-2x as long).
+  // best so far (or, within 1 % of the source density, in 1 % fewer image texels), on
+  // footprints rasterized once per best scale; most shapes stop there, and a packing takes
+  // 1-2x as long as with the three shapes alone.
   std::deque<Packing> tried;  // the refinement's winners; `best` may point here
   if (!o.keep_aspect && !o.pot && o.size == 0 && o.measure == CostMeasure::ImageTexels) {
     double best_aspect = aspects[size_t(best - found.data())];
