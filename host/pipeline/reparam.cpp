@@ -1403,10 +1403,10 @@ void finish_encoding(Run& run) {
 // one), each with its shapes as they are, built into that budget and scored as written.
 // Which plan and which gutter serve a budget best depends on the budget: the plan kept at
 // half of Duck's texels (`repack+wide-gutter`) scores q 0.00179 at a tenth,
-// `unit-scale+least-squares` 0.00107, the resize 0.00155. The shapes stay those of the requested cost: the equal-slope
-// allocation made afresh at each budget serves the demo worse below half its texels (q
-// 0.0589 against 0.0467 at a fifth) than the half's layout scaled down (the
-// `+half-allocation` plans reparam builds below half the texels).
+// `unit-scale+least-squares` 0.00107, the resize 0.00155. The shapes stay those of the
+// requested cost: the equal-slope allocation made afresh at each budget serves the demo
+// worse below half its texels (q 0.0589 against 0.0467 at a fifth) than the half's layout
+// scaled down (the `+half-allocation` plans reparam builds below half the texels).
 void build_curve(Run& run) {
   const ReparamOptions& o = run.o;
   json ignored = json::array();  // the curve's layouts warn as the kept one did
