@@ -91,7 +91,7 @@ void add_batch(CLI::App& app, Globals& g) {
       ->excludes(cost)
       ->excludes(size);
   cmd->add_flag("--pot", o.reparam.power_of_two, "Power-of-two texture sizes");
-  cmd->add_flag("--keep-aspect", o.reparam.keep_aspect, "New textures keep the source's aspect ratio (default: any of 1:2 to 2:1 of it, in steps of 2^(1/4), where that packs the charts larger)");
+  add_keep_aspect_option(cmd, o.reparam.keep_aspect);
   cmd->add_option("--gutter", o.reparam.gutter, "Texels between charts, half of it at image edges a sampler repeats across (default: mip-safe for the new image's size: every mip level clean down to the first of side <= 64 texels, at most 16: 8 texels at 362^2, 16 from 1024^2)")->check(CLI::Range(0u, 64u));
   a->block_align = cmd->add_option("--block-align", o.reparam.block, "Align charts to N x N blocks (4 for BCn and ASTC 4x4; 5, 6, 8 for ASTC 5x5, 6x6, 8x8; default: 1, or the --astc-block when square)")->capture_default_str()->check(CLI::IsMember({1u, 4u, 5u, 6u, 8u}));
   add_gpu_output_options(cmd, a->gpu);

@@ -67,6 +67,8 @@ CLI::Validator cost_grid_value();
 void add_view_options(CLI::App* cmd, uint32_t& resolution, eval::TextureFilter& filter, const std::string& prefix);
 // eval's shading on `cmd`: PREFIXshading auto|unlit|lit (prefixes as above).
 void add_shading_option(CLI::App* cmd, eval::Shading& shading, const std::string& prefix);
+// reparam's --keep-aspect on `cmd` (reparam, batch, bench pack): one text for all three.
+void add_keep_aspect_option(CLI::App* cmd, bool& keep_aspect);
 
 // GPU-ready copies of the written textures (gpu_output.cpp): --texture-format source|astc,
 // --astc-block WxH, --astc-quality Q.

@@ -16,6 +16,12 @@
 
 namespace uvpress::cli {
 
+void add_keep_aspect_option(CLI::App* cmd, bool& keep_aspect) {
+  cmd->add_flag("--keep-aspect", keep_aspect,
+                "New textures keep the source's aspect ratio (default: any shape from 1:2 to 2:1 of it, or to 1:4 "
+                "and 4:1, where that packs the charts larger)");
+}
+
 void add_reparam(CLI::App& app, Globals& g) {
   auto* cmd = app.add_subcommand("reparam", "Re-parameterize an asset so that smaller textures look as good (GMSD)");
   auto input = std::make_shared<std::string>(), output = std::make_shared<std::string>();
@@ -36,7 +42,7 @@ void add_reparam(CLI::App& app, Globals& g) {
   cmd->add_flag("--pot", o->power_of_two, "Power-of-two texture sizes");
   add_view_options(cmd, o->score_resolution, o->score_filter, "--score-");
   add_shading_option(cmd, o->score_shading, "--score-");
-  cmd->add_flag("--keep-aspect", o->keep_aspect, "New textures keep the source's aspect ratio (default: any of 1:2 to 2:1 of it, in steps of 2^(1/4), where that packs the charts larger)");
+  add_keep_aspect_option(cmd, o->keep_aspect);
   cmd->add_option("--gutter", o->gutter, "Texels between charts, half of it at image edges a sampler repeats across (default: mip-safe for the new image's size: every mip level clean down to the first of side <= 64 texels, at most 16: 8 texels at 362^2, 16 from 1024^2)")->check(CLI::Range(0u, 64u));
   auto* block_align = cmd->add_option("--block-align", o->block, "Align charts to N x N blocks (4 for BCn and ASTC 4x4, 5, 6, 8 for ASTC 5x5, 6x6, 8x8; default: 1, or the --astc-block when square)")->capture_default_str()->check(CLI::IsMember({1u, 4u, 5u, 6u, 8u}));
   auto gpu = std::make_shared<GpuOutputArgs>();
