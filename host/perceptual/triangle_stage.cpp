@@ -142,21 +142,35 @@ std::array<double, 4> jacobian_of(const double x[4], double lambda_min, double* 
   return multiply(rotation(a), S);
 }
 
-std::vector<double> measure_triangles(engine::Engine& engine, const TriangleViewInput& input,
-                                      const std::vector<float>& texture, const TriangleStageOptions& o,
-                                      const std::array<double, 4>& j, const std::vector<uint32_t>& which) {
+std::vector<std::vector<double>> measure_triangles(engine::Engine& engine, const TriangleViewInput& input,
+                                                   const std::vector<float>& texture, const TriangleStageOptions& o,
+                                                   const std::vector<std::array<double, 4>>& jacobians,
+                                                   const std::vector<uint32_t>& which) {
   TriangleViews tv = make_triangle_views(input, o.view_size, which, o.max_patches, o.min_texels_per_pixel);
   tv.desc.texture = texture.data(), tv.desc.texture_width = input.texture_width;
   tv.desc.texture_height = input.texture_height;
   auto views = engine.prepare_views(tv.desc);
+  // Every view at every Jacobian in one batch: the views' references are rendered once (a
+  // set of views prepared per Jacobian cost Fox's equal-slope losses ~1.5 s), and each
+  // candidate's score does not depend on the others in its batch.
+  const uint32_t nv = uint32_t(tv.desc.views.size());
   std::vector<engine::ViewCandidate> c;
-  for (uint32_t v = 0; v < tv.desc.views.size(); ++v)
-    c.push_back({{float(j[0]), float(j[1]), float(j[2]), float(j[3])}, v, 0, 0, 0});
+  c.reserve(size_t(nv) * jacobians.size());
+  for (const auto& j : jacobians)
+    for (uint32_t v = 0; v < nv; ++v) c.push_back({{float(j[0]), float(j[1]), float(j[2]), float(j[3])}, v, 0, 0, 0});
   std::vector<float> g(c.size());
   if (!c.empty()) engine.score_views(*views, c.data(), c.size(), g.data());
-  std::vector<double> out(tv.first_view.size() - 1);
-  for (size_t k = 0; k < out.size(); ++k) out[k] = combine(&g[tv.first_view[k]], tv.first_view[k + 1] - tv.first_view[k]);
+  std::vector<std::vector<double>> out(jacobians.size(), std::vector<double>(tv.first_view.size() - 1));
+  for (size_t j = 0; j < jacobians.size(); ++j)
+    for (size_t k = 0; k < out[j].size(); ++k)
+      out[j][k] = combine(&g[j * nv + tv.first_view[k]], tv.first_view[k + 1] - tv.first_view[k]);
   return out;
+}
+
+std::vector<double> measure_triangles(engine::Engine& engine, const TriangleViewInput& input,
+                                      const std::vector<float>& texture, const TriangleStageOptions& o,
+                                      const std::array<double, 4>& j, const std::vector<uint32_t>& which) {
+  return measure_triangles(engine, input, texture, o, std::vector<std::array<double, 4>>{j}, which).front();
 }
 
 std::vector<TriangleResult> optimize_triangles(engine::Engine& engine, const TriangleViewInput& input,

@@ -94,6 +94,12 @@ std::array<double, 4> jacobian_of(const double x[4], double lambda_min, double* 
 std::vector<double> measure_triangles(engine::Engine& engine, const TriangleViewInput& input,
                                       const std::vector<float>& texture, const TriangleStageOptions& options,
                                       const std::array<double, 4>& jacobian, const std::vector<uint32_t>& triangles = {});
+// The same at several Jacobians (result [jacobian][triangle]): the views are set up once and
+// every Jacobian scored in one batch; the numbers are those of one call per Jacobian.
+std::vector<std::vector<double>> measure_triangles(engine::Engine& engine, const TriangleViewInput& input,
+                                                   const std::vector<float>& texture, const TriangleStageOptions& options,
+                                                   const std::vector<std::array<double, 4>>& jacobians,
+                                                   const std::vector<uint32_t>& triangles = {});
 
 // Optimizes `triangles` (all when empty) of the mesh in `input`, sampling `texture`
 // (luminance, input.texture_width x texture_height). Deterministic for a given seed,

@@ -327,11 +327,11 @@ void measure_unit_losses(const io::Asset& asset, const Layout& L, Prepared& P, e
       w[k] = surface_area(prim, which[si][k]);
       sampled_surface[slot[si][k].first] += w[k];
     }
-    for (size_t j = 0; j < ns; ++j) {
-      const double s = kSlopeScales[j];
-      const std::vector<double> loss = perceptual::measure_triangles(engine, in, luminance, options, {s, 0, 0, s}, which[si]);
-      for (size_t k = 0; k < loss.size(); ++k) g[slot[si][k].first][j] += w[k] * loss[k];
-    }
+    std::vector<std::array<double, 4>> jacobians;
+    for (double s : kSlopeScales) jacobians.push_back({s, 0, 0, s});
+    const auto loss = perceptual::measure_triangles(engine, in, luminance, options, jacobians, which[si]);
+    for (size_t j = 0; j < ns; ++j)
+      for (size_t k = 0; k < loss[j].size(); ++k) g[slot[si][k].first][j] += w[k] * loss[j][k];
   }
   P.unit_loss.scales = kSlopeScales;
   for (size_t u = 0; u < nu; ++u) {
@@ -1111,10 +1111,12 @@ void measure_slope_losses(Run& run, const Layout& L, Prepared& P, const std::vec
       if (which.empty()) continue;
       perceptual::TriangleViewInput in{prim.positions.data(), prim.vertex_count(), prim.indices.data(),
                                        prim.triangle_count(), uv.data(), driver.width, driver.height};
-      std::vector<std::vector<double>> g;
+      // The shrinks' losses (at s = 1 the triangle stage's own measure of the identity).
+      std::vector<std::array<double, 4>> jacobians;
       for (double s : curves.scales)
-        g.push_back(s < 1 ? perceptual::measure_triangles(engine, in, luminance, o.triangle, {s, 0, 0, s}, which)
-                          : std::vector<double>());
+        if (s < 1) jacobians.push_back({s, 0, 0, s});
+      std::vector<std::vector<double>> g = perceptual::measure_triangles(engine, in, luminance, o.triangle, jacobians, which);
+      g.resize(curves.scales.size());  // the scales are ascending: those at 1 come last, empty
       for (size_t k = 0; k < which.size(); ++k) {
         const perceptual::TriangleResult& r = P.results[si][which[k]];
         where.push_back({si, which[k]});

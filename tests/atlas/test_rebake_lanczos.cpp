@@ -65,8 +65,9 @@ TEST_CASE("rebake_lanczos: a turned, anisotropically shrunk chart is the Lanczos
   // The whole 64^2 source mapped by n = c + A (p - 32) (texels), A = R(30 deg) diag(0.4, 0.6):
   // both axes shrink, so the kernel's coordinates of a source offset d are A d (the
   // header's V min(S^-1, 1) U^T d with J = A^-1). The reference evaluates that kernel
-  // directly, in double, over every source texel (repeat wrap); the bake steps its sines
-  // along the tap lattice, so a wrong step or axis shows here, not in the uniform resize.
+  // directly, in double, over every source texel (repeat wrap); the bake reads a table of
+  // the kernel and visits per source row only the span of taps inside the kernel's turned
+  // square, so a wrong axis or a span cut short shows here, not in the uniform resize.
   const Image src = noise(64, 64, 3);
   const double ang = M_PI / 6, sx = 0.4, sy = 0.6, c = 24;
   const double A[2][2] = {{std::cos(ang) * sx, -std::sin(ang) * sy}, {std::sin(ang) * sx, std::cos(ang) * sy}};
@@ -107,8 +108,8 @@ TEST_CASE("rebake_lanczos: a turned, anisotropically shrunk chart is the Lanczos
   INFO("texels checked " << checked << ", worst difference " << worst);
   CHECK(checked > 300);
   // Not closer: the bake's map comes from the float corners (~1e-6 texel off A), and unit
-  // steps of noise move a Lanczos sum by ~10 per texel of shift (the sines taken by libm
-  // per tap differ from the reference by the same 3.6e-5). A wrong kernel is off by ~0.1.
+  // steps of noise move a Lanczos sum by ~10 per texel of shift (the kernel's table is within
+  // 1e-7 of it). A wrong kernel is off by ~0.1, a tap missing at a span's end by ~1e-2.
   CHECK(worst < 1e-4);
 }
 
