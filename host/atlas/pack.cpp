@@ -570,8 +570,11 @@ struct SizeRule {
 
   static uint32_t round_up(uint32_t v, uint32_t b) { return std::max(b, (v + b - 1) / b * b); }
 
-  // Longer side L (a power of two when pot) -> width, height.
-  std::array<uint32_t, 2> dims(uint32_t L) const {
+  // Longer side L (a power of two when pot) -> width, height. With a budget of `texels`
+  // (image texels, without pot), never more than it: the two sides, each rounded on its own,
+  // could exceed it by up to a side (the demo at half its texels: 316 x 415 = 0.5003 of the
+  // source's), so the shorter side gives way.
+  std::array<uint32_t, 2> dims(uint32_t L, double texels = 0) const {
     uint32_t other;
     const double r = aspect >= 1 ? aspect : 1 / aspect;
     if (pot) {
@@ -580,8 +583,13 @@ struct SizeRule {
     } else {
       other = std::max<uint32_t>(1, uint32_t(std::lround(L / r)));
     }
-    uint32_t w = aspect >= 1 ? L : other, h = aspect >= 1 ? other : L;
-    return {round_up(w, block), round_up(h, block)};
+    uint32_t w = round_up(aspect >= 1 ? L : other, block), h = round_up(aspect >= 1 ? other : L, block);
+    if (!pot && texels > 0 && double(w) * h > texels) {
+      uint32_t& shorter = aspect >= 1 ? h : w;
+      const uint32_t longer = aspect >= 1 ? w : h;
+      shorter = std::max(block, uint32_t(std::floor(texels / longer)) / block * block);
+    }
+    return {w, h};
   }
   uint32_t nearest_pot(double L) const {
     const int e = std::clamp(int(std::lround(std::log2(std::max(1.0, L)))), 0, 30);
@@ -601,7 +609,7 @@ std::array<uint32_t, 2> image_dims(double aspect, double texels, uint32_t block)
   SizeRule rule;
   rule.aspect = aspect;
   rule.block = block;
-  return rule.dims(longer_side(texels, aspect >= 1 ? aspect : 1 / aspect));
+  return rule.dims(longer_side(texels, aspect >= 1 ? aspect : 1 / aspect), texels);
 }
 
 }  // namespace
@@ -668,7 +676,7 @@ Packing choose_at_aspect(const std::vector<ChartShape>& charts, double area1, ui
   } else {
     const double texels = o.cost * double(old_width) * old_height;
     uint32_t L = o.pot ? rule.nearest_pot(std::sqrt(texels * r)) : longer_side(texels, r);
-    auto d = rule.dims(L);
+    auto d = rule.dims(L, texels);
     p = pack_max_scale(charts, d[0], d[1], o.pack, o.s_max);
     if (p.ok && p.scale >= o.s_max) {  // at full density: shrink the atlas to what is needed
       if (o.pot) {
