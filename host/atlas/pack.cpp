@@ -575,21 +575,31 @@ struct SizeRule {
   // could exceed it by up to a side (the demo at half its texels: 316 x 415 = 0.5003 of the
   // source's), so the shorter side gives way.
   std::array<uint32_t, 2> dims(uint32_t L, double texels = 0) const {
-    uint32_t other;
     const double r = aspect >= 1 ? aspect : 1 / aspect;
-    if (pot) {
-      const int e = int(std::lround(std::log2(r)));
-      other = std::max<uint32_t>(1, L >> std::min(e, 31));
-    } else {
-      other = std::max<uint32_t>(1, uint32_t(std::lround(L / r)));
+    // Longer and shorter side, each rounded up to whole blocks.
+    auto sides = [&](uint32_t longer) -> std::array<uint32_t, 2> {
+      uint32_t other;
+      if (pot) {
+        const int e = int(std::lround(std::log2(r)));
+        other = std::max<uint32_t>(1, longer >> std::min(e, 31));
+      } else {
+        other = std::max<uint32_t>(1, uint32_t(std::lround(longer / r)));
+      }
+      return {round_up(longer, block), round_up(other, block)};
+    };
+    std::array<uint32_t, 2> d = sides(L);
+    if (!pot && texels > 0 && double(d[0]) * d[1] > texels) {
+      // Over: the shorter side gives way, or the longer one by a block (a block-rounded
+      // square, 91 -> 96 a side, is better 88 x 88 than 96 x 80), whichever keeps more.
+      const auto fit = [&](std::array<uint32_t, 2> s) {
+        s[1] = std::min(s[1], std::max(block, uint32_t(std::floor(texels / s[0])) / block * block));
+        return s;
+      };
+      const std::array<uint32_t, 2> a = fit(d);
+      const std::array<uint32_t, 2> b = d[0] > block ? fit(sides(d[0] - block)) : a;
+      d = double(b[0]) * b[1] > double(a[0]) * a[1] ? b : a;
     }
-    uint32_t w = round_up(aspect >= 1 ? L : other, block), h = round_up(aspect >= 1 ? other : L, block);
-    if (!pot && texels > 0 && double(w) * h > texels) {
-      uint32_t& shorter = aspect >= 1 ? h : w;
-      const uint32_t longer = aspect >= 1 ? w : h;
-      shorter = std::max(block, uint32_t(std::floor(texels / longer)) / block * block);
-    }
-    return {w, h};
+    return aspect >= 1 ? d : std::array<uint32_t, 2>{d[1], d[0]};
   }
   uint32_t nearest_pot(double L) const {
     const int e = std::clamp(int(std::lround(std::log2(std::max(1.0, L)))), 0, 30);

@@ -150,9 +150,9 @@ std::vector<std::vector<double>> measure_triangles(engine::Engine& engine, const
   tv.desc.texture = texture.data(), tv.desc.texture_width = input.texture_width;
   tv.desc.texture_height = input.texture_height;
   auto views = engine.prepare_views(tv.desc);
-  // Every view at every Jacobian in one batch: the views' references are rendered once (a
-  // set of views prepared per Jacobian cost Fox's equal-slope losses ~1.5 s), and each
-  // candidate's score does not depend on the others in its batch.
+  // Every view at every Jacobian in one batch: the views are prepared once, not once per
+  // Jacobian, and a candidate's score does not depend on the others in its batch (engines
+  // chunk a batch as they need).
   const uint32_t nv = uint32_t(tv.desc.views.size());
   std::vector<engine::ViewCandidate> c;
   c.reserve(size_t(nv) * jacobians.size());

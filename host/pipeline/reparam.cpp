@@ -1448,9 +1448,11 @@ void guard_against_resize(Run& run) {
     // even where the packer chose another one.
     const double w0 = t.old_size[0], h0 = t.old_size[1];
     const double texels = double(t.new_size[0]) * double(t.new_size[1]);
-    // Never more texels than reparam's image (so never over the budget either).
-    const uint32_t w = std::max(1u, uint32_t(std::lround(std::sqrt(texels * w0 / h0))));
-    const uint32_t h = std::max(1u, uint32_t(std::floor(texels / w)));
+    // Never more texels than reparam's image (so never over the budget either), in whole
+    // blocks with --block-align.
+    const uint32_t b = std::max(1u, run.o.block);
+    const uint32_t w = std::max(b, uint32_t(std::lround(std::sqrt(texels * w0 / h0) / b)) * b);
+    const uint32_t h = std::max(b, uint32_t(std::floor(texels / w)) / b * b);
     sizes.push_back({t.image, {w, h}});
   }
   io::GltfFile resized = original;
