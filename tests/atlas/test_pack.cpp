@@ -497,6 +497,15 @@ TEST_CASE("pack: an image-texel budget is never exceeded, whatever the shape cho
           }
   CHECK(checked >= 150);
   CHECK(shapes_off_square > 0);  // the free shapes were exercised
+  // A square source in BCn blocks of 8 at half its texels: 362 a side rounds up to 368, over
+  // the budget; the square gives way whole (360 x 360), not its shorter side (368 x 352).
+  atlas::BudgetOptions o;
+  o.measure = atlas::CostMeasure::ImageTexels;
+  o.cost = 0.5, o.pack.block = 8, o.pack.gutter = 2;
+  const auto sq = atlas::choose_atlas({rect(0, 0, 500, 500)}, 512, 512, 0, o);
+  REQUIRE(sq.packing.ok);
+  CHECK(sq.packing.width == 360);
+  CHECK(sq.packing.height == 360);
 }
 
 TEST_CASE("pack: the same packing on any thread count", "[atlas]") {
