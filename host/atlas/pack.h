@@ -134,7 +134,8 @@ struct AtlasChoice {
 //    power-of-two size nearest (in log area) to that atlas, and the scale is then re-fitted
 //    to it (so c_r is only approximate with pot).
 //  - ImageTexels: width * height <= cost * old_width * old_height (the shape's largest within
-//    it: the shorter side gives way where rounding both would exceed it), then the largest scale;
+//    it: where both sides rounded would exceed it, the shorter side gives way, or the longer
+//    one by a block if that keeps more), then the largest scale;
 //    when that scale reaches s_max the atlas shrinks to the smallest that still fits.
 // Sides are multiples of the block size. ok = false when nothing fits. With keep_aspect
 // false: the source's aspect, 2:1 and 1:2 of it (then 4:1 or 1:4), and for ImageTexels
