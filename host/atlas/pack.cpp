@@ -573,7 +573,7 @@ struct SizeRule {
   // Longer side L (a power of two when pot) -> width, height. With a budget of `texels`
   // (image texels, without pot), never more than it: the two sides, each rounded on its own,
   // could exceed it by up to a side (the demo at half its texels: 316 x 415 = 0.5003 of the
-  // source's), so the shorter side gives way.
+  // source's), so then one of them gives way (below).
   std::array<uint32_t, 2> dims(uint32_t L, double texels = 0) const {
     const double r = aspect >= 1 ? aspect : 1 / aspect;
     // Longer and shorter side, each rounded up to whole blocks.
