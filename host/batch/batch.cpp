@@ -90,6 +90,15 @@ json options_json(const BatchOptions& o) {
             {"allow_outside_refs", o.refs.allow_outside},
             {"texture_format", o.astc ? json{{"astc", io::block_name(*o.astc)}, {"quality", io::to_string(o.astc->quality)}} : json("source")}};
   if (o.strict) j["strict"] = true;  // absent when off: earlier results stay current
+  // Likewise each of these only when it differs from reparam's default (an explicit
+  // --epsilon equal to the default turns rate control off: a different result).
+  const pipeline::ReparamOptions defaults;
+  if (r.rate_control != defaults.rate_control) j["rate_control"] = r.rate_control;
+  if (r.triangle.min_texels_per_pixel != defaults.triangle.min_texels_per_pixel)
+    j["view_texels_per_pixel"] = r.triangle.min_texels_per_pixel;
+  if (r.exact_texels != defaults.exact_texels) j["exact_texels"] = r.exact_texels;
+  if (r.candidates != defaults.candidates) j["candidates"] = r.candidates;
+  if (r.guard != defaults.guard) j["guard"] = r.guard;
   if (o.eval) j["eval_options"] = {{"cost_grid", o.eval_options.cost_grid}, {"resolution", o.eval_options.resolution}, {"filter", eval::to_string(o.eval_options.filter)}, {"shading", eval::to_string(o.eval_options.shading)}};
   return j;
 }

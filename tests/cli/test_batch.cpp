@@ -126,6 +126,26 @@ TEST_CASE("batch: reports, summary, one failure never stops the others, resume",
   r = run_uvpress(cmd + " --cost 0.3");
   CHECK_THAT(r.out, Catch::Contains("1 ok, 2 skipped, 1 failed"));
 
+  // Options recorded only where they differ from reparam's defaults still mark every
+  // output stale: the guard turned off, and an explicit --epsilon equal to the default
+  // (it turns rate control off, a different result). batch takes reparam's options.
+  r = run_uvpress(cmd + " --cost 0.3 --force-reparam");
+  CHECK_THAT(r.out, Catch::Contains("3 ok, 0 skipped, 1 failed"));
+  CHECK(read_json(out / "asset0.report.json")["options"]["guard"] == false);
+  CHECK_FALSE(read_json(out / "asset0.report.json")["options"].contains("rate_control"));
+  r = run_uvpress(cmd + " --cost 0.3 --epsilon 0.01 --no-candidates --resample-all --view-texels-per-pixel 0.5");
+  CHECK_THAT(r.out, Catch::Contains("3 ok, 0 skipped, 1 failed"));
+  {
+    const json opts = read_json(out / "asset0.report.json")["options"];
+    CHECK(opts["rate_control"] == false);
+    CHECK(opts["candidates"] == false);
+    CHECK(opts["exact_texels"] == false);
+    CHECK(opts["view_texels_per_pixel"] == 0.5);
+    CHECK_FALSE(opts.contains("guard"));
+  }
+  r = run_uvpress(cmd + " --cost 0.3 --epsilon 0.01 --no-candidates --resample-all --view-texels-per-pixel 0.5");
+  CHECK_THAT(r.out, Catch::Contains("0 ok, 3 skipped, 1 failed"));
+
   // Usage errors exit 2.
   CHECK(run_uvpress(cmd + " --shard-index 2 --shard-count 2").exit_code == 2);
   CHECK(run_uvpress("batch -o x").exit_code == 2);

@@ -69,7 +69,7 @@ void add_batch(CLI::App& app, Globals& g) {
   auto* cmd = app.add_subcommand("batch", "reparam (and eval) over a manifest of assets: resumable, sharded, parallel");
   struct Args {
     batch::BatchOptions o;
-    bool no_optimize = false, collect = false;
+    bool collect = false;
     std::vector<double> grid;
     std::optional<size_t> shard_index, shard_count;
     GpuOutputArgs gpu;
@@ -80,37 +80,11 @@ void add_batch(CLI::App& app, Globals& g) {
   cmd->add_option("--manifest", o.manifest, "Text file: one asset path a line ('#' comments; relative to the file)")->required();
   cmd->add_option("-o,--output", o.output_dir, "Output folder (created when missing)")->required();
   cmd->add_option("--format", o.format, "Output format of each asset")->capture_default_str()->check(CLI::IsMember({"glb", "gltf"}));
-  auto* cost = cmd->add_option("--cost", o.reparam.cost, "Texels of the new textures relative to the old (0.5: half)")
-                   ->capture_default_str()
-                   ->check(CLI::Range(0.001, 1.0));
-  auto* size = cmd->add_option("--size", o.reparam.size, "New size of the driving texture's longer side, instead of --cost")
-                   ->check(CLI::Range(8u, 16384u))
-                   ->excludes(cost);
-  cmd->add_option("--max-gmsd", o.reparam.max_gmsd, "Instead of --cost: the smallest textures whose 20-view GMSD is at most Q")
-      ->check(CLI::Range(1e-5, 0.5))
-      ->excludes(cost)
-      ->excludes(size);
-  cmd->add_flag("--pot", o.reparam.power_of_two, "Power-of-two texture sizes");
-  add_keep_aspect_option(cmd, o.reparam.keep_aspect);
-  cmd->add_option("--gutter", o.reparam.gutter, "Texels between charts, half of it at image edges a sampler repeats across (default: mip-safe for the new image's size: every mip level clean down to the first of side <= 64 texels, at most 16: 8 texels at 362^2, 16 from 1024^2)")->check(CLI::Range(0u, 64u));
-  a->block_align = cmd->add_option("--block-align", o.reparam.block, "Align charts to N x N blocks (4 for BCn and ASTC 4x4; 5, 6, 8 for ASTC 5x5, 6x6, 8x8; default: 1, or the --astc-block when square)")->capture_default_str()->check(CLI::IsMember({1u, 4u, 5u, 6u, 8u}));
+  a->block_align = add_reparam_options(cmd, o.reparam);
   add_gpu_output_options(cmd, a->gpu);
-  cmd->add_option("--epsilon", o.reparam.triangle.epsilon, "One GMSD bound for every triangle view (eq. 12; default: per triangle, from the loss a resize to the cost would cause)")
-      ->check(CLI::Range(1e-4, 0.5))
-      ->each([a](const std::string&) { a->o.reparam.rate_control = false; });
-  cmd->add_option("--evaluations", o.reparam.triangle.evaluations, "GP-BO evaluations per triangle")->capture_default_str()->check(CLI::Range(11, 1000));
-  cmd->add_option("--view-size", o.reparam.triangle.view_size, "Per-triangle view size in pixels")->capture_default_str()->check(CLI::IsMember({16u, 32u, 48u, 64u}));
-  cmd->add_flag("--early-stop,!--no-early-stop", o.reparam.triangle.early_stop,
-                "Stop a triangle's search once it stalls (the default); --no-early-stop spends all --evaluations");
-  cmd->add_option("--seed", o.reparam.triangle.seed, "Seed of the Bayesian optimization")->capture_default_str();
-  cmd->add_flag("--no-optimize", a->no_optimize, "Keep every triangle's shape: only repack and re-bake");
-  cmd->add_flag("--force-reparam", [a](int64_t) { a->o.reparam.guard = false; },
-                "Write reparam's layout even when a plain resize to the same texels looks better");
   cmd->add_flag("--eval", o.eval, "Also evaluate each result against its input (NAME.eval.json)");
   add_view_options(cmd, o.eval_options.resolution, o.eval_options.filter, "--eval-");
   add_shading_option(cmd, o.eval_options.shading, "--eval-");
-  add_view_options(cmd, o.reparam.score_resolution, o.reparam.score_filter, "--score-");
-  add_shading_option(cmd, o.reparam.score_shading, "--score-");
   cmd->add_option("--eval-cost-grid", a->grid, "eval: relative costs, each in (0, 4], comma-separated")
       ->delimiter(',')
       ->check(cost_grid_value());
@@ -123,7 +97,6 @@ void add_batch(CLI::App& app, Globals& g) {
   cmd->callback([&g, a] {
     g.action = [&g, a]() -> int {
       batch::BatchOptions o = a->o;
-      o.reparam.optimize = !a->no_optimize;
       if (a->gpu.format == "astc") o.astc = a->gpu.astc;
       o.reparam.block = block_alignment(a->gpu, o.reparam.block, a->block_align->count() > 0);
       o.version = UVPRESS_VERSION;

@@ -33,7 +33,7 @@ void add_bench_pack(CLI::App& bench, Globals& g) {
   cmd->add_option("--costs", a->costs, "Costs at which each asset's own charts are repacked")->delimiter(',')->capture_default_str();
   cmd->add_option("--cost", a->reparam_cost, "reparam --cost for the reparam layout")->capture_default_str()->check(CLI::Range(0.001, 1.0));
   cmd->add_flag("--no-reparam", a->no_reparam, "Only the own layouts (reparam's takes minutes per asset)");
-  cmd->add_option("--gutter", a->reparam.gutter, "Texels between charts, half of it at image edges a sampler repeats across (default: mip-safe for the new image's size: every mip level clean down to the first of side <= 64 texels, at most 16: 8 texels at 362^2, 16 from 1024^2)")->check(CLI::Range(0u, 64u));
+  add_gutter_option(cmd, a->reparam.gutter);
   cmd->add_option("--block", a->reparam.block, "Chart alignment (4 for BCn)")->capture_default_str();
   add_keep_aspect_option(cmd, a->reparam.keep_aspect);
   cmd->add_flag("--pot", a->reparam.power_of_two, "Power-of-two sizes");

@@ -17,6 +17,10 @@
 #include <memory>
 #include <string>
 
+namespace uvpress::pipeline {
+struct ReparamOptions;
+}
+
 namespace uvpress::cli {
 
 struct Globals {
@@ -67,8 +71,13 @@ CLI::Validator cost_grid_value();
 void add_view_options(CLI::App* cmd, uint32_t& resolution, eval::TextureFilter& filter, const std::string& prefix);
 // eval's shading on `cmd`: PREFIXshading auto|unlit|lit (prefixes as above).
 void add_shading_option(CLI::App* cmd, eval::Shading& shading, const std::string& prefix);
-// reparam's --keep-aspect on `cmd` (reparam, batch, bench pack): one text for all three.
+// reparam's --keep-aspect and --gutter on `cmd` (reparam, batch, bench pack): one text each.
 void add_keep_aspect_option(CLI::App* cmd, bool& keep_aspect);
+void add_gutter_option(CLI::App* cmd, uint32_t& gutter);
+// Every option of reparam's layout and bake on `cmd` (reparam and batch: the same names,
+// texts and checks): cost, scoring views, packing, triangle stage, candidates and guard.
+// Returns --block-align, whose presence block_alignment() needs.
+CLI::Option* add_reparam_options(CLI::App* cmd, pipeline::ReparamOptions& o);
 
 // GPU-ready copies of the written textures (gpu_output.cpp): --texture-format source|astc,
 // --astc-block WxH, --astc-quality Q.

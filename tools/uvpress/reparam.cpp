@@ -22,54 +22,72 @@ void add_keep_aspect_option(CLI::App* cmd, bool& keep_aspect) {
                 "and 4:1, where that packs the charts larger)");
 }
 
+void add_gutter_option(CLI::App* cmd, uint32_t& gutter) {
+  cmd->add_option("--gutter", gutter,
+                  "Texels between charts, half of it at image edges a sampler repeats across (default: mip-safe for "
+                  "the new image's size: every mip level clean down to the first of side <= 64 texels, at most 16: 8 "
+                  "texels at 362^2, 16 from 1024^2)")
+      ->check(CLI::Range(0u, 64u));
+}
+
+CLI::Option* add_reparam_options(CLI::App* cmd, pipeline::ReparamOptions& o) {
+  pipeline::ReparamOptions* r = &o;  // bound like the options themselves: it outlives parsing
+  auto* cost = cmd->add_option("--cost", o.cost, "Texels of the new textures relative to the old (0.5: half)")
+                   ->capture_default_str()
+                   ->check(CLI::Range(0.001, 1.0));
+  auto* size = cmd->add_option("--size", o.size, "New size of the driving texture's longer side, instead of --cost")
+                   ->check(CLI::Range(8u, 16384u))
+                   ->excludes(cost);
+  cmd->add_option("--max-gmsd", o.max_gmsd, "Instead of --cost: the smallest textures whose 20-view GMSD is at most Q")
+      ->check(CLI::Range(1e-5, 0.5))
+      ->excludes(cost)
+      ->excludes(size);
+  cmd->add_flag("--pot", o.power_of_two, "Power-of-two texture sizes");
+  add_view_options(cmd, o.score_resolution, o.score_filter, "--score-");
+  add_shading_option(cmd, o.score_shading, "--score-");
+  add_keep_aspect_option(cmd, o.keep_aspect);
+  add_gutter_option(cmd, o.gutter);
+  auto* block_align =
+      cmd->add_option("--block-align", o.block,
+                      "Align charts to N x N blocks (4 for BCn and ASTC 4x4; 5, 6, 8 for ASTC 5x5, 6x6, 8x8; default: 1, "
+                      "or the --astc-block when square)")
+          ->capture_default_str()
+          ->check(CLI::IsMember({1u, 4u, 5u, 6u, 8u}));
+  cmd->add_option("--epsilon", o.triangle.epsilon, "One GMSD bound for every triangle view (eq. 12; default: per triangle, from the loss a resize to the cost would cause)")
+      ->check(CLI::Range(1e-4, 0.5))
+      ->each([r](const std::string&) { r->rate_control = false; });
+  cmd->add_option("--evaluations", o.triangle.evaluations, "GP-BO evaluations per triangle")->capture_default_str()->check(CLI::Range(11, 1000));
+  cmd->add_option("--view-size", o.triangle.view_size, "Per-triangle view size in pixels")->capture_default_str()->check(CLI::IsMember({16u, 32u, 48u, 64u}));
+  cmd->add_option("--seed", o.triangle.seed, "Seed of the Bayesian optimization")->capture_default_str();
+  cmd->add_option("--view-texels-per-pixel", o.triangle.min_texels_per_pixel,
+                  "Small triangles' views magnify their texels no more than this (0: the paper's bounding-square view)")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1.0));
+  cmd->add_flag("--early-stop,!--no-early-stop", o.triangle.early_stop,
+                "Stop a triangle's search once it stalls (40+ evaluations, 30 without gain; the default); "
+                "--no-early-stop spends all --evaluations");
+  cmd->add_flag("--no-optimize", [r](int64_t) { r->optimize = false; }, "Keep every triangle's shape: only repack and re-bake");
+  cmd->add_flag("--resample-all", [r](int64_t) { r->exact_texels = false; },
+                "Resample every chart, also those that keep their shape (default: their texels are copied)");
+  cmd->add_flag("--no-candidates", [r](int64_t) { r->candidates = false; },
+                "Build only the paper's layout (no floored-stretch or repacked candidates to choose from)");
+  cmd->add_flag("--force-reparam", [r](int64_t) { r->guard = false; },
+                "Write reparam's layout even when a plain resize to the same texels looks better");
+  return block_align;
+}
+
 void add_reparam(CLI::App& app, Globals& g) {
   auto* cmd = app.add_subcommand("reparam", "Re-parameterize an asset so that smaller textures look as good (GMSD)");
   auto input = std::make_shared<std::string>(), output = std::make_shared<std::string>();
   auto o = std::make_shared<pipeline::ReparamOptions>();
-  auto no_optimize = std::make_shared<bool>(false);
   cmd->add_option("input", *input, "glTF asset (.gltf or .glb)")->required();
   cmd->add_option("-o,--output", *output, "Output file (.gltf or .glb)")->required();
-  auto* cost = cmd->add_option("--cost", o->cost, "Texels of the new textures relative to the old (0.5: half)")
-                   ->capture_default_str()
-                   ->check(CLI::Range(0.001, 1.0));
-  auto* size = cmd->add_option("--size", o->size, "New size of the driving texture's longer side, instead of --cost")
-                   ->check(CLI::Range(8u, 16384u))
-                   ->excludes(cost);
-  cmd->add_option("--max-gmsd", o->max_gmsd, "Instead of --cost: the smallest textures whose 20-view GMSD is at most Q")
-      ->check(CLI::Range(1e-5, 0.5))
-      ->excludes(cost)
-      ->excludes(size);
-  cmd->add_flag("--pot", o->power_of_two, "Power-of-two texture sizes");
-  add_view_options(cmd, o->score_resolution, o->score_filter, "--score-");
-  add_shading_option(cmd, o->score_shading, "--score-");
-  add_keep_aspect_option(cmd, o->keep_aspect);
-  cmd->add_option("--gutter", o->gutter, "Texels between charts, half of it at image edges a sampler repeats across (default: mip-safe for the new image's size: every mip level clean down to the first of side <= 64 texels, at most 16: 8 texels at 362^2, 16 from 1024^2)")->check(CLI::Range(0u, 64u));
-  auto* block_align = cmd->add_option("--block-align", o->block, "Align charts to N x N blocks (4 for BCn and ASTC 4x4, 5, 6, 8 for ASTC 5x5, 6x6, 8x8; default: 1, or the --astc-block when square)")->capture_default_str()->check(CLI::IsMember({1u, 4u, 5u, 6u, 8u}));
+  auto* block_align = add_reparam_options(cmd, *o);
   auto gpu = std::make_shared<GpuOutputArgs>();
   add_gpu_output_options(cmd, *gpu);
-  cmd->add_option("--epsilon", o->triangle.epsilon, "One GMSD bound for every triangle view (eq. 12; default: per triangle, from the loss a resize to the cost would cause)")
-      ->check(CLI::Range(1e-4, 0.5))
-      ->each([o](const std::string&) { o->rate_control = false; });
-  cmd->add_option("--evaluations", o->triangle.evaluations, "GP-BO evaluations per triangle")->capture_default_str()->check(CLI::Range(11, 1000));
-  cmd->add_option("--view-size", o->triangle.view_size, "Per-triangle view size in pixels")->capture_default_str()->check(CLI::IsMember({16u, 32u, 48u, 64u}));
-  cmd->add_option("--seed", o->triangle.seed, "Seed of the Bayesian optimization")->capture_default_str();
-  cmd->add_option("--view-texels-per-pixel", o->triangle.min_texels_per_pixel,
-                  "Small triangles' views magnify their texels no more than this (0: the paper's bounding-square view)")
-      ->capture_default_str()
-      ->check(CLI::Range(0.0, 1.0));
-  cmd->add_flag("--early-stop,!--no-early-stop", o->triangle.early_stop,
-                "Stop a triangle's search once it stalls (40+ evaluations, 30 without gain; the default); "
-                "--no-early-stop spends all --evaluations");
-  cmd->add_flag("--no-optimize", *no_optimize, "Keep every triangle's shape: only repack and re-bake");
-  cmd->add_flag("--resample-all", [o](int64_t) { o->exact_texels = false; },
-                "Resample every chart, also those that keep their shape (default: their texels are copied)");
-  cmd->add_flag("--no-candidates", [o](int64_t) { o->candidates = false; },
-                "Build only the paper's layout (no floored-stretch or repacked candidates to choose from)");
-  cmd->add_flag("--force-reparam", [o](int64_t) { o->guard = false; },
-                "Write reparam's layout even when a plain resize to the same texels looks better");
-  cmd->callback([&g, input, output, o, no_optimize, gpu, block_align] {
+  cmd->callback([&g, input, output, o, gpu, block_align] {
     o->block = block_alignment(*gpu, o->block, block_align->count() > 0);
-    g.action = [&g, input, output, o, no_optimize, gpu] {
+    g.action = [&g, input, output, o, gpu] {
       auto t0 = std::chrono::steady_clock::now();
       if (!io::is_gltf_output_path(*output)) throw InputError(*output, "unsupported output format (use .gltf or .glb)");
       g.prepare_outputs({*output});  // before the work, not after it
@@ -79,8 +97,7 @@ void add_reparam(CLI::App& app, Globals& g) {
       const io::AssetBytes in_files = io::asset_bytes(*input, g.refs());
       const nlohmann::ordered_json old_costs = pipeline::image_costs(file)["totals"];
       auto engine = g.make_engine();
-      pipeline::ReparamOptions options = *o;
-      options.optimize = !*no_optimize;
+      const pipeline::ReparamOptions options = *o;
       ProgressDisplay progress(g.verbose);
       const pipeline::ReparamResult r = pipeline::reparam(file, *engine, options, std::ref(progress));
       progress.finish();
