@@ -13,6 +13,7 @@
 #include <stdexcept>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 namespace uvpress::engine {
@@ -141,13 +142,37 @@ size_t mip_chain_texels(uint32_t width, uint32_t height, uint32_t levels);
 // Levels of the full chain of a width x height texture, down to 1 x 1.
 uint32_t mip_chain_levels(uint32_t width, uint32_t height);
 
+// std::allocator, except that resize() leaves new elements default-initialized (for
+// numbers: unwritten) instead of zeroing them. For buffers whose every element is written
+// next, at eval's sizes: zeroing a 20 M-pixel render or a reference's 60 M pixels first
+// was a serial pass over memory the render then writes again in parallel.
+template <class T>
+struct UninitializedAllocator : std::allocator<T> {
+  template <class U>
+  struct rebind {
+    using other = UninitializedAllocator<U>;
+  };
+  UninitializedAllocator() noexcept = default;
+  template <class U>
+  UninitializedAllocator(const UninitializedAllocator<U>&) noexcept {}
+  template <class U, class... Args>
+  void construct(U* p, Args&&... args) {
+    if constexpr (sizeof...(Args) == 0) ::new (static_cast<void*>(p)) U;
+    else ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
+  }
+};
+// A vector whose resize() does not zero (UninitializedAllocator).
+template <class T>
+using UninitializedVector = std::vector<T, UninitializedAllocator<T>>;
+
 // Renders, view after view: coverage (triangle index, kNoMeshTriangle where empty) and
 // `channels` floats a pixel; with several textures (render_mesh_textures) the pixels hold
-// every view of the first texture, then every view of the next, coverage once.
+// every view of the first texture, then every view of the next, coverage once. Every
+// element is written by the render.
 struct MeshRenders {
   uint32_t width = 0, height = 0, count = 0, channels = 0, textures = 1;
-  std::vector<uint32_t> coverage;
-  std::vector<float> pixels;
+  UninitializedVector<uint32_t> coverage;
+  UninitializedVector<float> pixels;
 };
 
 // One texture of render_mesh_textures: a mip chain laid out as MeshRenderDesc's texture.

@@ -549,7 +549,7 @@ std::pair<uint32_t, uint32_t> size_at(double c_r, double ref_texels, double aspe
 // The reference's views: luminance, unlit, and when the evaluation is lit the lit views
 // too (views x res x res each).
 struct ReferenceViews {
-  std::vector<float> unlit, lit;
+  engine::UninitializedVector<float> unlit, lit;  // every pixel written (reference_views)
 };
 
 // What every evaluation of one reference shares: its layout, the cameras, the view

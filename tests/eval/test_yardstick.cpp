@@ -151,7 +151,7 @@ TEST_CASE("render_mesh trilinear: single-texel detail minified averages out, bil
   REQUIRE(chain.size() == engine::mip_chain_texels(side, side, levels));
   auto d = sq.desc(64);
   d.texture = chain.data(), d.texture_width = d.texture_height = side;
-  auto spread = [](const std::vector<float>& px) {
+  auto spread = [](const auto& px) {
     const auto [lo, hi] = std::minmax_element(px.begin(), px.end());
     return *hi - *lo;
   };
