@@ -9,6 +9,8 @@
 #include <cstdint>
 #include <vector>
 
+#include "engine.h"
+
 namespace uvpress::engine::cpu {
 
 template <class Real>
@@ -18,8 +20,8 @@ Real gmsd(const Real* a, const Real* b, uint32_t width, uint32_t height) {
   if (n < 2) return Real(0);
   // Every element is written before it is read. The buffers are the thread's own and kept
   // from call to call: fresh ones for eval's 1696-px views were mapped and page-faulted
-  // anew on every call, a third of the time of this function.
-  thread_local std::vector<Real> scratch;
+  // anew on every call, a third of the time of this function; not zeroed when they grow.
+  thread_local UninitializedVector<Real> scratch;
   if (scratch.size() < 3 * n) scratch.resize(3 * n);
   Real* const d1 = scratch.data();
   Real* const d2 = d1 + n;
