@@ -9,6 +9,7 @@
 #include <array>
 #include <cstdint>
 #include <memory>
+#include <new>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -146,6 +147,10 @@ uint32_t mip_chain_levels(uint32_t width, uint32_t height);
 // numbers: unwritten) instead of zeroing them. For buffers whose every element is written
 // next, at eval's sizes: zeroing a 20 M-pixel render or a reference's 60 M pixels first
 // was a serial pass over memory the render then writes again in parallel.
+// Large ones are asked for in huge pages (engine/large_buffer.cpp): a page fault apiece
+// for 2 MiB instead of 4 KiB, where each fault is costly (virtual machines).
+void* allocate_buffer(size_t bytes);
+void free_buffer(void* p);
 template <class T>
 struct UninitializedAllocator : std::allocator<T> {
   template <class U>
@@ -155,6 +160,11 @@ struct UninitializedAllocator : std::allocator<T> {
   UninitializedAllocator() noexcept = default;
   template <class U>
   UninitializedAllocator(const UninitializedAllocator<U>&) noexcept {}
+  T* allocate(size_t n) {
+    if (n > size_t(-1) / sizeof(T)) throw std::bad_alloc();
+    return static_cast<T*>(allocate_buffer(n * sizeof(T)));
+  }
+  void deallocate(T* p, size_t) noexcept { free_buffer(p); }
   template <class U, class... Args>
   void construct(U* p, Args&&... args) {
     if constexpr (sizeof...(Args) == 0) ::new (static_cast<void*>(p)) U;
