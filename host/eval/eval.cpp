@@ -407,8 +407,8 @@ size_t total_pixels(const std::vector<ViewFrame>& frames) {
 // the rasterization; an evaluation keeps one per level of nesting (Setup).
 struct RenderScratch {
   engine::MeshRenders renders;
-  std::vector<float> pixels;
-  std::vector<uint32_t> coverage;
+  engine::UninitializedVector<float> pixels;  // stitched views: every pixel written (or assigned 0)
+  engine::UninitializedVector<uint32_t> coverage;
 };
 
 // Renders every view of `m` once per texture of `textures`, chunk by chunk: fn(first view,
@@ -434,8 +434,8 @@ void render_views(engine::Engine& engine, const LayoutMesh& m, const std::vector
   std::vector<engine::MeshTexture> mesh_textures;
   for (const Texture* t : textures) mesh_textures.push_back({t->texels.data(), t->width, t->height, t->levels});
   engine::MeshRenders& r = scratch.renders;
-  std::vector<float>& stitched = scratch.pixels;
-  std::vector<uint32_t>& stitched_coverage = scratch.coverage;
+  auto& stitched = scratch.pixels;
+  auto& stitched_coverage = scratch.coverage;
   for (size_t first = 0; first < frames.size();) {
     const ViewFrame& f0 = frames[first];
     const size_t limit = per_chunk ? per_chunk : std::max<size_t>(1, kChunkPixels / (f0.pixels() * K));
