@@ -31,7 +31,6 @@ void add_gutter_option(CLI::App* cmd, uint32_t& gutter) {
 }
 
 CLI::Option* add_reparam_options(CLI::App* cmd, pipeline::ReparamOptions& o) {
-  pipeline::ReparamOptions* r = &o;  // bound like the options themselves: it outlives parsing
   auto* cost = cmd->add_option("--cost", o.cost, "Texels of the new textures relative to the old (0.5: half)")
                    ->capture_default_str()
                    ->check(CLI::Range(0.001, 1.0));
@@ -55,7 +54,7 @@ CLI::Option* add_reparam_options(CLI::App* cmd, pipeline::ReparamOptions& o) {
           ->check(CLI::IsMember({1u, 4u, 5u, 6u, 8u}));
   cmd->add_option("--epsilon", o.triangle.epsilon, "One GMSD bound for every triangle view (eq. 12; default: per triangle, from the loss a resize to the cost would cause)")
       ->check(CLI::Range(1e-4, 0.5))
-      ->each([r](const std::string&) { r->rate_control = false; });
+      ->each([&o](const std::string&) { o.rate_control = false; });
   cmd->add_option("--evaluations", o.triangle.evaluations, "GP-BO evaluations per triangle")->capture_default_str()->check(CLI::Range(11, 1000));
   cmd->add_option("--view-size", o.triangle.view_size, "Per-triangle view size in pixels")->capture_default_str()->check(CLI::IsMember({16u, 32u, 48u, 64u}));
   cmd->add_option("--seed", o.triangle.seed, "Seed of the Bayesian optimization")->capture_default_str();
@@ -66,12 +65,12 @@ CLI::Option* add_reparam_options(CLI::App* cmd, pipeline::ReparamOptions& o) {
   cmd->add_flag("--early-stop,!--no-early-stop", o.triangle.early_stop,
                 "Stop a triangle's search once it stalls (40+ evaluations, 30 without gain; the default); "
                 "--no-early-stop spends all --evaluations");
-  cmd->add_flag("--no-optimize", [r](int64_t) { r->optimize = false; }, "Keep every triangle's shape: only repack and re-bake");
-  cmd->add_flag("--resample-all", [r](int64_t) { r->exact_texels = false; },
+  cmd->add_flag("--no-optimize", [&o](int64_t) { o.optimize = false; }, "Keep every triangle's shape: only repack and re-bake");
+  cmd->add_flag("--resample-all", [&o](int64_t) { o.exact_texels = false; },
                 "Resample every chart, also those that keep their shape (default: their texels are copied)");
-  cmd->add_flag("--no-candidates", [r](int64_t) { r->candidates = false; },
+  cmd->add_flag("--no-candidates", [&o](int64_t) { o.candidates = false; },
                 "Build only the paper's layout (no floored-stretch or repacked candidates to choose from)");
-  cmd->add_flag("--force-reparam", [r](int64_t) { r->guard = false; },
+  cmd->add_flag("--force-reparam", [&o](int64_t) { o.guard = false; },
                 "Write reparam's layout even when a plain resize to the same texels looks better");
   return block_align;
 }
