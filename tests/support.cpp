@@ -59,14 +59,17 @@ std::vector<std::string> RunResult::err_lines() const {
   return lines;
 }
 
-namespace {
-
-std::string slurp(const fs::path& p) {
+std::string read_file(const fs::path& p) {
   std::ifstream in(p, std::ios::binary);
   return std::string(std::istreambuf_iterator<char>(in), {});
 }
 
-}  // namespace
+nlohmann::json read_json(const fs::path& p) { return nlohmann::json::parse(read_file(p)); }
+
+void write_lines(const fs::path& p, const std::vector<std::string>& lines) {
+  std::ofstream out(p);
+  for (const auto& l : lines) out << l << "\n";
+}
 
 RunResult run_shell(const std::string& command) {
   Scratch io("run");
@@ -74,8 +77,8 @@ RunResult run_shell(const std::string& command) {
   int status = std::system(full.c_str());
   RunResult r;
   r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-  r.out = slurp(io / "out");
-  r.err = slurp(io / "err");
+  r.out = read_file(io / "out");
+  r.err = read_file(io / "err");
   return r;
 }
 

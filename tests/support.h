@@ -53,6 +53,11 @@ RunResult run_shell(const std::string& command);
 // output, no temporaries).
 void check_input_error(const Scratch& dir, const std::string& args, const fs::path& file, const std::string& reason);
 
+// A file's bytes (empty when it cannot be read), its JSON, and a text file of `lines`.
+std::string read_file(const fs::path& p);
+nlohmann::json read_json(const fs::path& p);
+void write_lines(const fs::path& p, const std::vector<std::string>& lines);
+
 // The Khronos validator's summary of a .gltf/.glb: {"numErrors", "errors": {code: n}}.
 nlohmann::json validate_gltf(const fs::path& file);
 

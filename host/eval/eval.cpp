@@ -187,15 +187,6 @@ std::array<float, 16> window_camera(const std::array<float, 16>& m, double side,
   return t;
 }
 
-// Clip coordinates of point p (x y z) under the row-major view-projection m, in double.
-static std::array<double, 4> clip_of(const std::array<float, 16>& m, const float* p) {
-  std::array<double, 4> c;
-  for (int row = 0; row < 4; ++row)
-    c[size_t(row)] = double(m[size_t(4 * row)]) * p[0] + double(m[size_t(4 * row + 1)]) * p[1] +
-                     double(m[size_t(4 * row + 2)]) * p[2] + double(m[size_t(4 * row + 3)]);
-  return c;
-}
-
 std::array<float, 16> roll_camera(const std::array<float, 16>& m, double angle) {
   // Rows 0 and 1 (clip x, y) rotated; clip w, so the perspective divide, is unchanged.
   std::array<float, 16> t = m;

@@ -118,17 +118,17 @@ std::array<double, 3> camera_eye(const std::array<float, 16>& m) {
   return e;
 }
 
-namespace {
-
-using Clip = std::array<double, 4>;
-
-Clip clip_of(const std::array<float, 16>& m, const float* p) {
-  Clip c;
+std::array<double, 4> clip_of(const std::array<float, 16>& m, const float* p) {
+  std::array<double, 4> c;
   for (int r = 0; r < 4; ++r)
     c[size_t(r)] = double(m[size_t(4 * r)]) * p[0] + double(m[size_t(4 * r + 1)]) * p[1] +
                    double(m[size_t(4 * r + 2)]) * p[2] + double(m[size_t(4 * r + 3)]);
   return c;
 }
+
+namespace {
+
+using Clip = std::array<double, 4>;
 
 // pixel_barycentrics from the corners' clip coordinates.
 bool clip_barycentrics(const Clip* const c[3], uint32_t i, uint32_t j, uint32_t width, uint32_t height,

@@ -92,6 +92,9 @@ std::vector<float> vertex_tangents(const std::vector<float>& positions, const st
 // x, y and w vanish.
 std::array<double, 3> camera_eye(const std::array<float, 16>& camera);
 
+// Clip coordinates of point p (x y z) under the row-major view-projection m, in double.
+std::array<double, 4> clip_of(const std::array<float, 16>& m, const float* p);
+
 // Perspective-correct barycentrics of the centre of pixel (i, j) (row 0 on top) of a
 // `width` x `height` view on the triangle p0 p1 p2 (world space): the point where the
 // pixel's ray meets the triangle's plane, as weights of the three corners (2-D weights in

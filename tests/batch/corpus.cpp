@@ -1,6 +1,7 @@
 #include "batch/corpus.h"
 
 #include "core/image.h"
+#include "io/atomic_file.h"
 #include "io/gltf_io.h"
 #include "io/image_io.h"
 #include "pipeline/demo_asset.h"
@@ -21,11 +22,6 @@ namespace fs = std::filesystem;
 using json = nlohmann::json;
 
 namespace {
-
-std::vector<uint8_t> slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  return std::vector<uint8_t>(std::istreambuf_iterator<char>(in), {});
-}
 
 void spit(const fs::path& p, const void* data, size_t n) {
   std::ofstream(p, std::ios::binary).write(static_cast<const char*>(data), std::streamsize(n));
@@ -115,7 +111,7 @@ std::vector<CorpusCase> make_bad_input_corpus(const fs::path& dir) {
   const io::GltfFile good = pipeline::make_demo_asset({4, 16});
   io::save_gltf(good, (dir / "good.glb").string());
   io::save_gltf(good, (dir / "good.gltf").string());
-  const std::vector<uint8_t> glb = slurp(dir / "good.glb");
+  const std::vector<uint8_t> glb = io::read_file((dir / "good.glb").string());
   const json base = json::parse(std::ifstream(dir / "good.gltf"));
   const auto& prim0 = good.model.meshes[0].primitives[0];
   const int pos = prim0.attributes.at("POSITION"), uv = prim0.attributes.at("TEXCOORD_0"), idx = prim0.indices;
@@ -317,7 +313,7 @@ std::vector<CorpusCase> make_bad_input_corpus(const fs::path& dir) {
   const fs::path up = dir / "uploads";
   fs::create_directories(up);
   io::save_gltf(good, (up / "good.gltf").string());
-  const std::vector<uint8_t> good_bin = slurp(up / base["buffers"][0]["uri"].get<std::string>());
+  const std::vector<uint8_t> good_bin = io::read_file((up / base["buffers"][0]["uri"].get<std::string>()).string());
   const std::vector<uint8_t> secret_png = png_with_text(good.image_bytes[0], kOutsideMarker);
   std::vector<uint8_t> secret_bin = good_bin;
   secret_bin.insert(secret_bin.end(), kOutsideMarker.begin(), kOutsideMarker.end());

@@ -14,11 +14,7 @@
 using namespace uvpress;
 using json = nlohmann::json;
 
-namespace {
-
-json read_json(const test::fs::path& p) { return json::parse(std::ifstream(p)); }
-
-}  // namespace
+using test::read_json;
 
 TEST_CASE("batch: input hashes cover a .glb's external files, read by the loader's rule", "[batch]") {
   test::Scratch dir("hash-refs");

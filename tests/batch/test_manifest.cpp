@@ -13,18 +13,10 @@
 
 using namespace uvpress;
 
-namespace {
-
-void write_manifest(const test::fs::path& file, const std::vector<std::string>& lines) {
-  std::ofstream m(file);
-  for (const auto& l : lines) m << l << "\n";
-}
-
-}  // namespace
 
 TEST_CASE("batch: manifest names, shards and the array-index variables", "[batch]") {
   test::Scratch dir("batch-manifest");
-  write_manifest(dir / "m.txt", {"# comment", "", "a/x.glb", "  b/x.glb  ", "/abs/y.gltf", "z w.glb"});
+  test::write_lines(dir / "m.txt", {"# comment", "", "a/x.glb", "  b/x.glb  ", "/abs/y.gltf", "z w.glb"});
   auto items = batch::read_manifest((dir / "m.txt").string());
   REQUIRE(items.size() == 4);
   CHECK(items[0].input == (dir / "a/x.glb").string());
@@ -39,7 +31,7 @@ TEST_CASE("batch: manifest names, shards and the array-index variables", "[batch
   CHECK(s0[1].position == 3);
   CHECK(s1.size() == 1);
   CHECK_THROWS_AS(batch::select_shard(items, 3, 3), std::invalid_argument);
-  write_manifest(dir / "empty.txt", {"# nothing"});
+  test::write_lines(dir / "empty.txt", {"# nothing"});
   CHECK_THROWS(batch::read_manifest((dir / "empty.txt").string()));
 
   auto env = [](std::map<std::string, std::string> vars) {

@@ -30,8 +30,8 @@ using json = nlohmann::json;
 namespace {
 
 using test::quoted;
+using test::read_json;
 
-json read_json(const test::fs::path& p) { return json::parse(std::ifstream(p)); }
 
 // `count` demo assets (different sizes, so different bytes) and a manifest listing them.
 std::vector<test::fs::path> write_assets(const test::fs::path& dir, int count, int grid = 6, int texture = 32) {
@@ -51,10 +51,6 @@ int run_uvpress_env(const std::string& env, const std::string& args) {
   return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
 }
 
-void write_manifest(const test::fs::path& file, const std::vector<std::string>& lines) {
-  std::ofstream m(file);
-  for (const auto& l : lines) m << l << "\n";
-}
 
 }  // namespace
 
@@ -62,7 +58,7 @@ TEST_CASE("batch: reports, summary, one failure never stops the others, resume",
   test::Scratch dir("batch-cli");
   auto assets = write_assets(dir.path(), 3);
   std::ofstream(dir / "in" / "broken.glb") << "glTF this is not";
-  write_manifest(dir / "list.txt", {"in/asset0.glb", "in/broken.glb", "in/asset1.glb", "in/asset2.glb"});
+  test::write_lines(dir / "list.txt", {"in/asset0.glb", "in/broken.glb", "in/asset1.glb", "in/asset2.glb"});
   auto out = dir / "out";
   const std::string cmd = "batch --manifest " + quoted(dir / "list.txt") + " -o " + quoted(out) + " --no-optimize --device cpu";
 
@@ -158,7 +154,7 @@ TEST_CASE("batch: reports, summary, one failure never stops the others, resume",
 TEST_CASE("batch: shards from flags and from SLURM_ARRAY_TASK_ID cover the manifest once, --collect merges", "[batch][cli]") {
   test::Scratch dir("batch-shards");
   write_assets(dir.path(), 3);
-  write_manifest(dir / "list.txt", {"in/asset0.glb", "in/asset1.glb", "in/asset2.glb"});
+  test::write_lines(dir / "list.txt", {"in/asset0.glb", "in/asset1.glb", "in/asset2.glb"});
   auto out = dir / "out";
   const std::string base = "batch --manifest " + quoted(dir / "list.txt") + " -o " + quoted(out) + " --no-optimize --device cpu";
   auto a = run_uvpress(base + " --shard-index 0 --shard-count 2");
@@ -182,7 +178,7 @@ TEST_CASE("batch: SIGKILL mid-way, then resume: every output complete and valid"
   write_assets(dir.path(), n, 24, 512);
   std::vector<std::string> lines;
   for (int k = 0; k < n; ++k) lines.push_back("in/asset" + std::to_string(k) + ".glb");
-  write_manifest(dir / "list.txt", lines);
+  test::write_lines(dir / "list.txt", lines);
   auto out = dir / "out";
   const std::string manifest = (dir / "list.txt").string(), out_dir = out.string();
 
@@ -266,7 +262,7 @@ TEST_CASE("batch --texture-format astc: KTX2 copies beside each output, in its h
           "[batch][cli][astc]") {
   test::Scratch dir("batch-astc");
   write_assets(dir.path(), 2, 6, 48);
-  write_manifest(dir / "list.txt", {"in/asset0.glb", "in/asset1.glb"});
+  test::write_lines(dir / "list.txt", {"in/asset0.glb", "in/asset1.glb"});
   const auto out = dir / "out";
   const std::string cmd = "batch --manifest " + quoted(dir / "list.txt") + " -o " + quoted(out) + " --no-optimize --device cpu";
 
@@ -328,7 +324,7 @@ TEST_CASE("batch --strict: an asset that breaks the glTF rules fails, without it
   const int uv = bad.model.meshes[0].primitives[0].attributes.at("TEXCOORD_0");
   bad.model.accessors[size_t(uv)].maxValues = {1.5, 1.5};
   io::save_gltf(bad, (dir / "in" / "bounds.glb").string());
-  write_manifest(dir / "list.txt", {"in/asset0.glb", "in/bounds.glb"});
+  test::write_lines(dir / "list.txt", {"in/asset0.glb", "in/bounds.glb"});
   auto out = dir / "out";
   const std::string cmd = "batch --manifest " + quoted(dir / "list.txt") + " -o " + quoted(out) + " --no-optimize --device cpu";
 

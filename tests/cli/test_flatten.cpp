@@ -42,10 +42,6 @@ std::string grid_obj(int n, const std::vector<int>& skip = {}) {
   return out.str();
 }
 
-std::string slurp(const test::fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), {});
-}
 
 
 }  // namespace
@@ -69,7 +65,7 @@ TEST_CASE("flatten CLI: OBJ in, OBJ with vt out, report and logs", "[flatten][cl
   CHECK(hi == Approx(1));
   CHECK(flatten::count_flips(out.uv_triangles, out.uvs) == 0);
 
-  auto report = nlohmann::json::parse(slurp(dir / "report.json"));
+  auto report = nlohmann::json::parse(test::read_file(dir / "report.json"));
   for (const char* key : {"method", "faces", "N_c", "eta", "t_c_s", "E_c", "s_per_iter", "flips", "peak_rss_mb"})
     CHECK(report.contains(key));
   CHECK(report["method"] == "progressive");
@@ -78,7 +74,7 @@ TEST_CASE("flatten CLI: OBJ in, OBJ with vt out, report and logs", "[flatten][cl
   CHECK(report["E_c"].get<double>() > 1);
   const int iterations = report["N_c"];
   // CSV: a header and one row per iteration, with the timing breakdown.
-  std::istringstream csv(slurp(dir / "log.csv"));
+  std::istringstream csv(test::read_file(dir / "log.csv"));
   std::string header, line;
   std::getline(csv, header);
   CHECK_THAT(header, Catch::Contains("energy") && Catch::Contains("t_com") && Catch::Contains("t_factorization") &&
@@ -90,7 +86,7 @@ TEST_CASE("flatten CLI: OBJ in, OBJ with vt out, report and logs", "[flatten][cl
   r = run_uvpress("flatten " + quoted(dir / "bump.obj") + " -o " + quoted(dir / "slim.obj") +
                   " --method slim --log " + quoted(dir / "log.json"));
   REQUIRE(r.exit_code == 0);
-  auto log = nlohmann::json::parse(slurp(dir / "log.json"));
+  auto log = nlohmann::json::parse(test::read_file(dir / "log.json"));
   REQUIRE(log["iterations"].size() > 0);
   CHECK(log["iterations"][0]["phase"] == "slim");
   CHECK(log["iterations"][0].contains("t_line_search"));
@@ -108,7 +104,7 @@ TEST_CASE("flatten CLI: glTF in, a new TEXCOORD set out, valid", "[flatten][cli]
   CHECK(attributes.count("TEXCOORD_0"));
   REQUIRE(attributes.count("TEXCOORD_1"));
   CHECK(test::validate_gltf(dir / "flat.glb")["numErrors"] == 0);
-  auto report = nlohmann::json::parse(slurp(dir / "report.json"));
+  auto report = nlohmann::json::parse(test::read_file(dir / "report.json"));
   CHECK(report["faces"] == 512);
   CHECK(report["flips"] == 0);
 }
@@ -155,7 +151,7 @@ TEST_CASE("flatten CLI: a failed factorization exits 1 with the reason and write
                        quoted(dir / "report.json"));
   INFO(r.err);
   REQUIRE(r.exit_code == 0);
-  auto report = nlohmann::json::parse(slurp(dir / "report.json"));
+  auto report = nlohmann::json::parse(test::read_file(dir / "report.json"));
   CHECK(report["converged"] == true);
   const std::string stop = report["stop"];
   CHECK((stop == "relative change" || stop == "gradient norm" || stop == "stalled at floor"));
@@ -174,7 +170,7 @@ TEST_CASE("flatten CLI: the same output bits with 1 and 2 threads (60K triangles
   };
   REQUIRE(run_with("1") == 0);
   REQUIRE(run_with("2") == 0);
-  const bool identical = slurp(dir / "t1.obj") == slurp(dir / "t2.obj");
+  const bool identical = test::read_file(dir / "t1.obj") == test::read_file(dir / "t2.obj");
   CHECK(identical);
 }
 
@@ -206,7 +202,7 @@ TEST_CASE("flatten CLI: glTF charts with holes flatten, a chart that cannot is s
       CHECK_THAT(line, Catch::Matches(".*: warning: mesh [0-9]+ primitive [0-9]+ chart [0-9]+: skipped: .*"));
       ++skipped_lines;
     }
-    auto j = nlohmann::json::parse(slurp(report));
+    auto j = nlohmann::json::parse(test::read_file(report));
     CHECK(j["flips"] == 0);
     CHECK(j["charts_skipped"].get<size_t>() == skipped_lines);
     CHECK(j["input_bytes"].get<uint64_t>() > 0);
@@ -319,7 +315,7 @@ TEST_CASE("flatten --assign: the materials use the flattened UVs, the texture re
   CHECK_THAT(r.out, Catch::Contains("1 charts flattened") && Catch::Contains("re-baked into TEXCOORD_0") &&
                         Catch::Contains("on screen q"));
   CHECK(test::validate_gltf(out)["numErrors"] == 0);
-  const auto j = nlohmann::json::parse(slurp(report));
+  const auto j = nlohmann::json::parse(test::read_file(report));
   CHECK(j["flips"] == 0);
   CHECK(j["overlaps_new"] == 0);
   CHECK(j["layouts"][0]["isometric"]["charts_flattened"] == 1);
@@ -348,14 +344,14 @@ TEST_CASE("flatten --assign: the materials use the flattened UVs, the texture re
   io::save_gltf(pipeline::make_demo_asset({16, 256}), plain.string());
   r = run_uvpress("flatten " + quoted(plain) + " -o " + quoted(plain_out) + " --assign --device cpu --report " + quoted(plain_report));
   REQUIRE(r.exit_code == 0);
-  const auto jp = nlohmann::json::parse(slurp(plain_report));
+  const auto jp = nlohmann::json::parse(test::read_file(plain_report));
   const double share = jp["layouts"][0]["chart_cost_ratio"].get<double>();
   CHECK(share > 0.85);  // turned back to the input's orientation, the sheet fills its box
   char grid[32];
   std::snprintf(grid, sizeof grid, "%.4f", share);
   r = run_uvpress("eval " + quoted(plain) + " --cost-grid " + grid + " --device cpu --report " + quoted(dir / "eval.json"));
   REQUIRE(r.exit_code == 0);
-  const double q_resize = nlohmann::json::parse(slurp(dir / "eval.json"))["layouts"][0]["curve"][0]["q"].get<double>();
+  const double q_resize = nlohmann::json::parse(test::read_file(dir / "eval.json"))["layouts"][0]["curve"][0]["q"].get<double>();
   INFO("q flattened " << jp["q"].get<double>() << ", q resized to " << share << " of the texels " << q_resize);
   CHECK(jp["q"].get<double>() < 1.25 * q_resize);
 }
@@ -369,7 +365,7 @@ TEST_CASE("flatten --assign on Duck: charts that share texels get their own, the
   INFO("stdout: " << r.out << "\nstderr: " << r.err);
   REQUIRE(r.exit_code == 0);
   CHECK(test::validate_gltf(out)["numErrors"] == 0);
-  const auto j = nlohmann::json::parse(slurp(report));
+  const auto j = nlohmann::json::parse(test::read_file(report));
   const auto& iso = j["layouts"][0]["isometric"];
   // Duck's mirrored halves share texels; flattened, each has its own.
   CHECK(j["layouts"][0]["shared_texel_charts"].get<size_t>() > 0);

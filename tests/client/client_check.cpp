@@ -1,5 +1,7 @@
 #include "client/client_check.h"
 
+#include "support.h"
+
 #include "core/quantile.h"
 #include "eval/resize.h"
 #include "io/gltf_io.h"
@@ -25,11 +27,6 @@ fs::path chromium_path() {
 }
 
 fs::path source_dir() { return fs::path(UVPRESS_SOURCE_DIR); }
-
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), {});
-}
 
 std::string quote(const std::string& s) {
   std::string out = "'";
@@ -139,12 +136,12 @@ std::optional<std::string> chromium_unavailable() {
     std::optional<std::string> why;
     for (int attempt = 0; attempt < 2; ++attempt) {
       const int rc = run_chromium(file_url(page), work, work / "dom.html", work / "log.txt", 60, 1000);
-      const std::string status = element_text(slurp(work / "dom.html"), "status");
+      const std::string status = element_text(read_file(work / "dom.html"), "status");
       if (rc == 0 && status.rfind("webgl2 ", 0) == 0) {
         why.reset();
         break;
       }
-      why = rc != 0 ? "Chromium cannot start (exit " + std::to_string(rc) + "): " + relevant_log(slurp(work / "log.txt"))
+      why = rc != 0 ? "Chromium cannot start (exit " + std::to_string(rc) + "): " + relevant_log(read_file(work / "log.txt"))
                     : "Chromium starts but WebGL 2 does not (SwiftShader): " + status;
     }
     std::error_code ec;
@@ -170,11 +167,11 @@ Render render(const std::vector<fs::path>& glbs, const fs::path& work, int tile)
   for (int attempt = 1; attempt <= 3; ++attempt) {
     const fs::path dom = work / "dom.html", log = work / "chromium.log";
     const int rc = run_chromium(url, work, dom, log, 180, 120000);
-    const std::string text = slurp(dom);
+    const std::string text = read_file(dom);
     const std::string status = element_text(text, "status");
     if (rc != 0 || status.rfind("done ", 0) != 0) {
       why = "attempt " + std::to_string(attempt) + ": Chromium exit " + std::to_string(rc) + ", page status '" +
-            tail(status, 2000) + "'\n" + relevant_log(slurp(log));
+            tail(status, 2000) + "'\n" + relevant_log(read_file(log));
       continue;
     }
     const std::string data = element_text(text, "result");
