@@ -32,7 +32,6 @@ namespace {
 using test::quoted;
 using test::read_json;
 
-
 // `count` demo assets (different sizes, so different bytes) and a manifest listing them.
 std::vector<test::fs::path> write_assets(const test::fs::path& dir, int count, int grid = 6, int texture = 32) {
   std::vector<test::fs::path> out;
@@ -50,7 +49,6 @@ int run_uvpress_env(const std::string& env, const std::string& args) {
   int status = std::system((env + " " + UVPRESS_BINARY + " " + args + " >/dev/null 2>&1").c_str());
   return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
 }
-
 
 }  // namespace
 
