@@ -9,6 +9,7 @@
 #include "io/gltf_rules.h"
 
 #include <csignal>
+#include <malloc.h>
 #include <cstdio>
 #include <cstdlib>
 #include <unistd.h>
@@ -79,19 +80,33 @@ std::string human_bytes(uint64_t b) {
 
 }  // namespace uvpress::cli
 
+namespace {
+
+// libgomp reads OMP_WAIT_POLICY once, in its initializer. Its default spins idle OpenMP
+// threads, which on a small machine steal the cores from the engine's own threads between
+// parallel regions: the triangle stage ran 4x slower on 2 cores. The executable's
+// .preinit_array runs before any shared library's initializer, so passive waiting is made
+// the default there (a user's own choice is kept). This replaced a re-exec of the process
+// with the variable set, which loaded the 275 shared libraries twice: `uvpress --version`
+// 0.84 -> 0.45 s.
+void passive_openmp_by_default(int, char**, char**) { setenv("OMP_WAIT_POLICY", "passive", 0); }
+__attribute__((section(".preinit_array"), used)) void (*const preinit_passive_openmp)(int, char**, char**) =
+    passive_openmp_by_default;
+
+}  // namespace
+
 int main(int argc, char** argv) {
   using namespace uvpress;
-  // libgomp reads OMP_WAIT_POLICY once, when it loads. Its default spins idle OpenMP
-  // threads, which on a small machine steal the cores from the engine's own threads
-  // between parallel regions: the triangle stage ran 4x slower on 2 cores. Unless the
-  // user chose a policy, run again with passive waiting (once: the variable is then set).
-  if (!std::getenv("OMP_WAIT_POLICY")) {
-    setenv("OMP_WAIT_POLICY", "passive", 1);
-    execv("/proc/self/exe", argv);  // returns only on failure: carry on as we are
-  }
   // A file-size limit (ulimit -f, a quota) then fails the write with EFBIG, which the
   // writers turn into one error line, instead of killing the process mid-output.
   std::signal(SIGXFSZ, SIG_IGN);
+  // Freed buffers stay in the heap for the next one of their size instead of going back to
+  // the kernel: glibc maps every block of 128 KiB and more on its own and unmaps it when
+  // freed, so each candidate's images and renders faulted in fresh pages again, on the
+  // thread that allocated them. CesiumMilkTruck's reparam at half the texels: 1.74 M -> 0.28 M
+  // page faults, 100 -> 77 s (see DEVELOPERS.md, Performance notes).
+  mallopt(M_MMAP_THRESHOLD, 1 << 30);
+  mallopt(M_TRIM_THRESHOLD, 1 << 30);
   cli::Globals g;
   if (const char* env = std::getenv("UVPRESS_DEVICE"); env && *env) g.device = env;
   if (const char* env = std::getenv("UVPRESS_VALIDATION"); env && std::string(env) == "1") g.validation = true;
