@@ -9,9 +9,9 @@
 #include "io/gltf_rules.h"
 
 #include <csignal>
-#include <malloc.h>
 #include <cstdio>
 #include <cstdlib>
+#include <malloc.h>
 #include <unistd.h>
 
 namespace uvpress::cli {
@@ -88,7 +88,7 @@ namespace {
 // .preinit_array runs before any shared library's initializer, so passive waiting is made
 // the default there (a user's own choice is kept). This replaced a re-exec of the process
 // with the variable set, which loaded the 275 shared libraries twice: `uvpress --version`
-// 0.84 -> 0.45 s.
+// 0.85 -> 0.46 s.
 void passive_openmp_by_default(int, char**, char**) { setenv("OMP_WAIT_POLICY", "passive", 0); }
 __attribute__((section(".preinit_array"), used)) void (*const preinit_passive_openmp)(int, char**, char**) =
     passive_openmp_by_default;
@@ -103,8 +103,8 @@ int main(int argc, char** argv) {
   // Freed buffers stay in the heap for the next one of their size instead of going back to
   // the kernel: glibc maps every block of 128 KiB and more on its own and unmaps it when
   // freed, so each candidate's images and renders faulted in fresh pages again, on the
-  // thread that allocated them. CesiumMilkTruck's reparam at half the texels: 1.74 M -> 0.28 M
-  // page faults, 100 -> 77 s (see DEVELOPERS.md, Performance notes).
+  // thread that allocated them. CesiumMilkTruck's reparam at half the texels: 1.8 M -> 0.26 M
+  // page faults, 110 -> 92 s, peak RSS +3 % (DEVELOPERS.md, Performance notes).
   mallopt(M_MMAP_THRESHOLD, 1 << 30);
   mallopt(M_TRIM_THRESHOLD, 1 << 30);
   cli::Globals g;
