@@ -1,5 +1,8 @@
 #include "support.h"
 
+#include "core/error.h"
+#include "io/atomic_file.h"
+
 #include <catch2/catch.hpp>
 
 #include <algorithm>
@@ -60,8 +63,12 @@ std::vector<std::string> RunResult::err_lines() const {
 }
 
 std::string read_file(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), {});
+  try {
+    const std::vector<uint8_t> bytes = io::read_file(p.string());
+    return std::string(bytes.begin(), bytes.end());
+  } catch (const InputError&) {
+    return {};  // absent or unreadable (a log Chromium never wrote)
+  }
 }
 
 nlohmann::json read_json(const fs::path& p) { return nlohmann::json::parse(read_file(p)); }

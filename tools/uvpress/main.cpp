@@ -12,7 +12,6 @@
 #include <cstdio>
 #include <cstdlib>
 #include <malloc.h>
-#include <unistd.h>
 
 namespace uvpress::cli {
 
