@@ -60,6 +60,7 @@ struct Footprint {
   double area = 0;             // scaled triangle area, texels^2
   uint32_t count = 0;          // set cells
   uint64_t covered = 0;        // texels whose centre some triangle covers (overlaps once)
+  uint32_t stride = 1;         // cells: positions are multiples of it (ChartShape::align)
 };
 
 // The x-extent of triangle v cut to the band y0 <= y <= y1 (y0 == y1: a line): its
@@ -109,11 +110,19 @@ Footprint rasterize(const ChartShape& chart, double scale, uint32_t block) {
     f.count = 1;
     return f;
   }
-  if (chart.snap) mx = std::floor(mx), my = std::floor(my);
+  // Aligned: the origin on a multiple of align, the extent padded to one (empty cells), so
+  // that every quarter turn's translation (place) is a multiple of align as well.
+  const bool aligned = chart.snap && chart.align > block && chart.align % block == 0;
+  const double a = aligned ? chart.align : 1;
+  if (chart.snap) mx = std::floor(mx / a) * a, my = std::floor(my / a) * a;
   f.min_x = mx, f.min_y = my;
   const double inv = 1.0 / block;
-  f.w = std::max<uint32_t>(1, uint32_t(std::ceil((Mx - mx) * inv - 1e-9)));
-  f.h = std::max<uint32_t>(1, uint32_t(std::ceil((My - my) * inv - 1e-9)));
+  f.stride = aligned ? chart.align / block : 1;
+  auto cells = [&](double extent) {
+    const uint32_t c = std::max<uint32_t>(1, uint32_t(std::ceil(extent * inv - 1e-9)));
+    return (c + f.stride - 1) / f.stride * f.stride;
+  };
+  f.w = cells(Mx - mx), f.h = cells(My - my);
   f.cells.assign(size_t(f.w) * f.h, 0);
   std::vector<uint8_t> centres(size_t(f.w) * block * f.h * block, 0);
   for (size_t t = 0; t + 2 < chart.triangles.size(); t += 3) {
@@ -236,6 +245,7 @@ class Blocked {
 // One orientation of a footprint: its size in cells and its set cells as runs per row.
 struct Oriented {
   int32_t fw = 0, fh = 0;
+  int32_t stride = 1;  // positions are multiples of it (Footprint::stride)
   struct Run {
     int32_t row, a, b;  // cells [a, b] of row `row` are set
   };
@@ -274,6 +284,7 @@ Oriented orient(const Footprint& f, const std::vector<Oriented::Run>& rows, cons
   Oriented o;
   o.fw = int32_t(k % 2 ? f.h : f.w);
   o.fh = int32_t(k % 2 ? f.w : f.h);
+  o.stride = int32_t(f.stride);
   const int32_t w = int32_t(f.w), h = int32_t(f.h);
   o.runs.reserve(k % 2 ? columns.size() : rows.size());
   switch (k) {
@@ -314,13 +325,14 @@ Oriented orient(const Footprint& f, const std::vector<Oriented::Run>& rows, cons
 }
 
 // The first free position of `o` in reading order (lowest row, then leftmost column), or
-// {-1, -1}. A position (x, y) is free when no run lands on a blocked cell; a run that does
-// rules out every x' <= (blocked cell) - a, so the scan jumps past it (a row of the atlas
-// costs a few jumps, not a test per column).
+// {-1, -1}; both coordinates multiples of o.stride. A position (x, y) is free when no run
+// lands on a blocked cell; a run that does rules out every x' <= (blocked cell) - a, so the
+// scan jumps past it (a row of the atlas costs a few jumps, not a test per column).
 std::array<int32_t, 2> first_fit(const Blocked& blocked, const std::vector<int32_t>& longest, const Oriented& o,
                                  int32_t wc, int32_t hc, int32_t y_end) {
   if (o.fw > wc || o.fh > hc || o.runs.empty()) return {-1, -1};
-  for (int32_t y = 0; y + o.fh <= hc && y < y_end; ++y) {
+  const int32_t stride = o.stride;
+  for (int32_t y = 0; y + o.fh <= hc && y < y_end; y += stride) {
     bool room = true;
     for (size_t k = 0; k < o.widest_count && room; ++k) room = longest[size_t(y + o.widest[k].row)] > o.widest[k].b - o.widest[k].a;
     if (!room) continue;
@@ -333,7 +345,7 @@ std::array<int32_t, 2> first_fit(const Blocked& blocked, const std::vector<int32
         if (blocked.first(y + r.row, x + r.a, x + r.b) < 0) continue;
         // Move to where this run fits in its row: no position in between can.
         const int32_t p = blocked.next_free_run(y + r.row, x + r.a, r.b - r.a + 1);
-        x = p < 0 ? wc : p - r.a;
+        x = p < 0 ? wc : (p - r.a + stride - 1) / stride * stride;
         hint = (hint + k) % o.runs.size();
         fits = false;
         break;
@@ -491,6 +503,13 @@ Packing place_any(const Prints& P, uint32_t width, uint32_t height, const PackOp
 
 }  // namespace
 
+uint32_t mip_phase_align(uint32_t gutter, uint32_t block) {
+  uint32_t a = 1;
+  while (2 * a <= gutter) a *= 2;
+  block = std::max(1u, block);
+  return a % block == 0 ? a : 1;
+}
+
 Packing pack_charts(const std::vector<ChartShape>& charts, uint32_t width, uint32_t height, double scale,
                     const PackOptions& options) {
   return place_any(rasterize_all(charts, scale, options), width, height, options);
@@ -566,7 +585,7 @@ namespace {
 struct SizeRule {
   double aspect = 1;  // width / height
   bool pot = false;
-  uint32_t block = 1;
+  uint32_t block = 1;  // sides are multiples of it (side_unit)
 
   static uint32_t round_up(uint32_t v, uint32_t b) { return std::max(b, (v + b - 1) / b * b); }
 
@@ -609,6 +628,13 @@ struct SizeRule {
 
 constexpr uint32_t kMaxSide = 1u << 16;
 
+// What an atlas's sides are multiples of: the block, or BudgetOptions::side_multiple where
+// the block divides it.
+uint32_t side_unit(const BudgetOptions& o) {
+  const uint32_t block = std::max<uint32_t>(1, o.pack.block);
+  return o.side_multiple > block && o.side_multiple % block == 0 ? o.side_multiple : block;
+}
+
 // The longer side of an atlas of `texels` image texels whose sides are r : 1 (not
 // power-of-two).
 uint32_t longer_side(double texels, double r) { return std::max<uint32_t>(1, uint32_t(std::lround(std::sqrt(texels * r)))); }
@@ -633,7 +659,7 @@ Packing choose_at_aspect(const std::vector<ChartShape>& charts, double area1, ui
   SizeRule rule;
   rule.aspect = aspect;
   rule.pot = o.pot;
-  rule.block = std::max<uint32_t>(1, o.pack.block);
+  rule.block = side_unit(o);
   const double r = rule.aspect >= 1 ? rule.aspect : 1 / rule.aspect;
 
   Prints prints;  // the last scale's footprints, reused while only the atlas size changes
@@ -755,7 +781,7 @@ AtlasChoice choose_atlas(const std::vector<ChartShape>& charts, uint32_t old_wid
   std::deque<Packing> tried;  // the refinement's winners; `best` may point here
   if (!o.keep_aspect && !o.pot && o.size == 0 && o.measure == CostMeasure::ImageTexels) {
     double best_aspect = aspects[size_t(best - found.data())];
-    const uint32_t block = std::max<uint32_t>(1, o.pack.block);
+    const uint32_t block = side_unit(o);
     Prints probe;  // the footprints at the probe's scale, kept while the best does not change
     probe.scale = -1;
     auto try_shapes = [&](const std::vector<double>& shapes) {

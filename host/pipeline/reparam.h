@@ -28,7 +28,7 @@ namespace uvpress::pipeline {
 // Which algorithm wrote an output: raised by every change that changes reparam's outputs
 // for the same input and options (layouts, bakes, gutters, encoders), so that a resumed
 // batch redoes what an older algorithm wrote (batch compares it with the options).
-constexpr int kReparamRevision = 12;  // 2: image-edge gutters by sampler, surround in gutters; 3: equal-slope candidates, least squares keeps the surround; 4: the wide-gutter variant; 5: normal-mapped assets scored lit (candidates, guard); 6: the unit-scale candidate, wide gutters for the best other plan too; 7: scoring views rolled to the asset and capped at 2560 where the cap binds (the truck); 8: below half the texels, the allocating plans also with the half's allocation; 9: the view bake's CG stops on its render error (triangle-stage scores move by ~1e-5); 10: the triangle stage stops stalled searches by default; 11: atlas shapes between 1:2 and 2:1 of the source's (steps of 2^(1/4) to 2^(1/16), the largest chart's own); 12: never a texel over an image-texel budget
+constexpr int kReparamRevision = 13;  // 2: image-edge gutters by sampler, surround in gutters; 3: equal-slope candidates, least squares keeps the surround; 4: the wide-gutter variant; 5: normal-mapped assets scored lit (candidates, guard); 6: the unit-scale candidate, wide gutters for the best other plan too; 7: scoring views rolled to the asset and capped at 2560 where the cap binds (the truck); 8: below half the texels, the allocating plans also with the half's allocation; 9: the view bake's CG stops on its render error (triangle-stage scores move by ~1e-5); 10: the triangle stage stops stalled searches by default; 11: atlas shapes between 1:2 and 2:1 of the source's (steps of 2^(1/4) to 2^(1/16), the largest chart's own); 12: never a texel over an image-texel budget; 13: the +mip-aligned variants
 
 struct ReparamOptions {
   double cost = 0.5;       // relative pixel cost c_r of the new textures vs the old (eq. 20-21)
@@ -208,6 +208,8 @@ struct LayoutReport {
   bool capped_at_source_density = false;  // scale reached scale_cap
   double packing_efficiency = 0;  // share of the image's texels under charts
   uint32_t gutter = 0;            // texels between charts
+  uint32_t mip_align = 1;         // copies' translations multiples of it (a +mip-aligned candidate) ...
+  uint32_t side_multiple = 1;     // ... and the atlas's sides multiples of this
   std::array<uint32_t, 2> edge_gutter{};  // texels at the left/right and top/bottom edges
   double gutter_texels = 0;       // texels kept empty around charts and at the edges
   double chart_cost_ratio = 0;    // eq. 21: texels under the charts / the input's

@@ -5,6 +5,7 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -530,4 +531,76 @@ TEST_CASE("pack: the same packing on any thread count", "[atlas]") {
     CHECK(a.packing.placements[c].ty == b.packing.placements[c].ty);
     CHECK(a.packing.placements[c].rotation == b.packing.placements[c].rotation);
   }
+}
+
+TEST_CASE("pack: mip-phase alignment: copied charts move by multiples of align under every quarter turn", "[atlas]") {
+  CHECK(atlas::mip_phase_align(8, 1) == 8);
+  CHECK(atlas::mip_phase_align(16, 1) == 16);
+  CHECK(atlas::mip_phase_align(12, 1) == 8);
+  CHECK(atlas::mip_phase_align(8, 4) == 8);
+  CHECK(atlas::mip_phase_align(8, 5) == 1);  // no power of two on a 5-texel grid
+  CHECK(atlas::mip_phase_align(1, 1) == 1);
+  CHECK(atlas::mip_phase_align(0, 1) == 1);
+  // Snapped charts at fractional positions (as unreshaped units arrive), some tall so that
+  // the packer turns them, among unsnapped ones that may go anywhere.
+  std::vector<ChartShape> charts = random_charts(24, 5);
+  for (size_t i = 0; i < charts.size(); ++i) {
+    if (i % 4 == 3) continue;
+    charts[i].snap = true;
+    charts[i].align = 8;
+  }
+  PackOptions opt;
+  opt.gutter = 4;
+  for (const double scale : {1.0, 0.75}) {
+    INFO("scale " << scale);
+    const Packing p = atlas::pack_max_scale(charts, 400, 300, opt, scale);
+    REQUIRE(p.ok);
+    std::vector<int> label;
+    CHECK(label_atlas(charts, p, label));
+    CHECK(gutters_hold(label, 400, 300, 4));
+    uint32_t turned = 0;
+    for (size_t i = 0; i < charts.size(); ++i) {
+      const auto& pl = p.placements[i];
+      if (!charts[i].snap) continue;
+      INFO("chart " << i << " turns " << pl.rotation << " t " << pl.tx << " " << pl.ty);
+      CHECK(std::fmod(pl.tx, 8.0) == 0);
+      CHECK(std::fmod(pl.ty, 8.0) == 0);
+      turned += pl.rotation != 0;
+    }
+    CHECK(turned > 0);
+  }
+  // Unaligned, the same snapped charts land on texels but not on every 8th (else this
+  // test could not tell).
+  for (auto& c : charts) c.align = 1;
+  const Packing p = atlas::pack_max_scale(charts, 400, 300, opt, 1.0);
+  REQUIRE(p.ok);
+  size_t off = 0;
+  for (size_t i = 0; i < charts.size(); ++i)
+    if (charts[i].snap) off += std::fmod(p.placements[i].tx, 8.0) != 0 || std::fmod(p.placements[i].ty, 8.0) != 0;
+  CHECK(off > 0);
+}
+
+TEST_CASE("pack: sides multiples of side_multiple, within an image-texel budget", "[atlas]") {
+  const auto charts = random_charts(20, 3);
+  atlas::BudgetOptions o;
+  o.measure = atlas::CostMeasure::ImageTexels;
+  o.keep_aspect = false;
+  o.pack.gutter = 4;
+  for (const double cost : {0.3, 0.5}) {
+    for (const uint32_t m : {8u, 16u}) {
+      INFO("cost " << cost << " side multiple " << m);
+      o.cost = cost, o.side_multiple = m;
+      const auto c = atlas::choose_atlas(charts, 500, 400, 0, o);
+      REQUIRE(c.packing.ok);
+      CHECK(c.packing.width % m == 0);
+      CHECK(c.packing.height % m == 0);
+      CHECK(double(c.packing.width) * c.packing.height <= cost * 500 * 400);
+    }
+  }
+  // A block that does not divide it leaves the block's own rule.
+  o.side_multiple = 16, o.pack.block = 6, o.cost = 0.5;
+  const auto c = atlas::choose_atlas(charts, 500, 400, 0, o);
+  REQUIRE(c.packing.ok);
+  CHECK(c.packing.width % 6 == 0);
+  CHECK(c.packing.height % 6 == 0);
 }
