@@ -988,7 +988,7 @@ struct Run {
   Candidate chosen_plan;
   // The plans build_curve() chooses among at each cost: the kept one before the wider gutter
   // and the best base plan of another name, each at both gutters when the gutter is
-  // automatic (choose_layout).
+  // automatic, the second-best other, and the +mip-aligned variants (choose_layout).
   std::vector<Candidate> curve_plans;
   ReparamResult result;
 };
@@ -1414,8 +1414,9 @@ void choose_layout(Run& run, const std::vector<Candidate>& plans) {
   // at 362 x 362 0.00069): Duck's `unit-scale+least-squares` 0.00074 unaligned, 0.00060
   // at A, 0.00037 at 2A; `bench quality` ratios with the A variants alone: Duck 0.941 ->
   // 0.516, MultiUVTest 0.774 -> 0.743 (with both: see docs/DEVELOPERS.md).
+  // Not under --size N: the sides would round up past the size asked for.
   const bool can_align = atlas::mip_phase_align(o.gutter == ReparamOptions::kAutoGutter ? 8 : o.gutter, o.block) > 1;
-  if (scorer && o.max_gmsd <= 0 && o.candidates && can_align) {
+  if (scorer && o.max_gmsd <= 0 && o.size == 0 && o.candidates && can_align) {
     std::vector<Candidate> aligned;
     if (run.chosen.unreshaped_units > 0) {
       for (uint32_t depth : {1u, 2u}) {
@@ -1447,7 +1448,8 @@ void finish_encoding(Run& run) {
 // Reparam's own q-c curve (bench quality, demo): at each of o.curve_costs the best on
 // screen of the layouts reparam chose among at the requested cost (Run::curve_plans: the
 // kept one and the best other at both gutters, the second-best other at the default
-// one), each with its shapes as they are, built into that budget and scored as written.
+// one, the +mip-aligned variants), each with its shapes as they are, built into that
+// budget and scored as written.
 // Which plan and which gutter serve a budget best depends on the budget: the plan kept at
 // half of Duck's texels (`repack+wide-gutter`) scores q 0.00179 at a tenth,
 // `unit-scale+least-squares` 0.00107, the resize 0.00155. The shapes stay those of the
