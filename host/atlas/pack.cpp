@@ -112,7 +112,7 @@ Footprint rasterize(const ChartShape& chart, double scale, uint32_t block) {
   }
   // Aligned: the origin on a multiple of align, the extent padded to one (empty cells), so
   // that every quarter turn's translation (place) is a multiple of align as well.
-  const bool aligned = chart.snap && chart.align > block && chart.align % block == 0;
+  const bool aligned = chart.snap && chart.align > 1 && chart.align % block == 0;
   const double a = aligned ? chart.align : 1;
   if (chart.snap) mx = std::floor(mx / a) * a, my = std::floor(my / a) * a;
   f.min_x = mx, f.min_y = my;
@@ -632,7 +632,7 @@ constexpr uint32_t kMaxSide = 1u << 16;
 // the block divides it.
 uint32_t side_unit(const BudgetOptions& o) {
   const uint32_t block = std::max<uint32_t>(1, o.pack.block);
-  return o.side_multiple > block && o.side_multiple % block == 0 ? o.side_multiple : block;
+  return o.side_multiple % block == 0 ? std::max(o.side_multiple, block) : block;
 }
 
 // The longer side of an atlas of `texels` image texels whose sides are r : 1 (not

@@ -28,6 +28,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <map>
 #include <numeric>
 #include <set>
@@ -464,7 +465,13 @@ atlas::BudgetOptions budget_options(const ReparamOptions& o, const Candidate& ca
                        : cand.wide_gutter                      ? atlas::mip_safe_gutter(budget_texels, 32, 4, 32)
                                                                : atlas::mip_safe_gutter(budget_texels);
   budget.pack.block = o.block;
-  if (cand.mip_aligned) budget.side_multiple = cand.mip_depth * atlas::mip_phase_align(budget.pack.gutter, budget.pack.block);
+  if (cand.mip_aligned) {
+    // At least four of them a side: a tiny budget under a wide gutter would otherwise round
+    // a side up past the budget (SizeRule::dims floors the shorter side at one multiple).
+    uint32_t m = cand.mip_depth * atlas::mip_phase_align(budget.pack.gutter, budget.pack.block);
+    while (m > 1 && 4.0 * m > std::sqrt(budget_texels) && (m / 2) % std::max(1u, o.block) == 0) m /= 2;
+    budget.side_multiple = m;
+  }
   return budget;
 }
 
@@ -1414,22 +1421,24 @@ void choose_layout(Run& run, const std::vector<Candidate>& plans) {
   // at 362 x 362 0.00069): Duck's `unit-scale+least-squares` 0.00074 unaligned, 0.00060
   // at A, 0.00037 at 2A; `bench quality` ratios with the A variants alone: Duck 0.941 ->
   // 0.516, MultiUVTest 0.774 -> 0.743 (with both: see docs/DEVELOPERS.md).
-  // Not under --size N: the sides would round up past the size asked for.
-  const bool can_align = atlas::mip_phase_align(o.gutter == ReparamOptions::kAutoGutter ? 8 : o.gutter, o.block) > 1;
-  if (scorer && o.max_gmsd <= 0 && o.size == 0 && o.candidates && can_align) {
+  // Not under --size N (the sides would round up past the size asked for); under --pot the
+  // sides are powers of two already, so only the copies' phase is varied; a plan whose
+  // gutter allows no alignment (A = 1) is not varied at all.
+  auto with_alignment = [&](Candidate c, uint32_t depth) -> std::optional<Candidate> {
+    c.name += depth == 1 ? "+mip-aligned" : "+mip-aligned-deep", c.mip_aligned = true, c.mip_depth = depth;
+    for (const Prepared& P : run.prepared)
+      if (atlas::mip_phase_align(budget_options(o, c, P.W, P.H).pack.gutter, o.block) > 1) return c;
+    return std::nullopt;
+  };
+  if (scorer && o.max_gmsd <= 0 && o.size == 0 && o.candidates) {
     std::vector<Candidate> aligned;
-    if (run.chosen.unreshaped_units > 0) {
+    if (run.chosen.unreshaped_units > 0)
       for (uint32_t depth : {1u, 2u}) {
-        Candidate c = run.chosen_plan;
-        c.name += depth == 1 ? "+mip-aligned" : "+mip-aligned-deep", c.mip_aligned = true, c.mip_depth = depth;
-        aligned.push_back(c);
+        if (depth == 2 && o.power_of_two) break;
+        if (auto c = with_alignment(run.chosen_plan, depth)) aligned.push_back(*c);
       }
-    }
-    if (!others.empty() && other_copies > 0) {
-      Candidate c = others[0];
-      c.name += "+mip-aligned", c.mip_aligned = true;
-      aligned.push_back(c);
-    }
+    if (!others.empty() && other_copies > 0)
+      if (auto c = with_alignment(others[0], 1)) aligned.push_back(*c);
     for (const Candidate& c : aligned) {
       consider(c);
       run.curve_plans.push_back(c);

@@ -69,7 +69,7 @@ struct ReparamOptions {
   // When not empty (bench quality, demo): reparam's own q-c curve, the report's `curve`
   // [{c_r, q, layout}]: at each of these costs the best of the kept plan and the best other
   // base plan, each at both gutters when the gutter is automatic, the second-best other
-  // base plan at the default gutter, and the +mip-aligned variants built, each built into that budget
+  // base plan at the default gutter, and the +mip-aligned variants reparam made, each built into that budget
   // with the shapes made for the requested cost, and scored as written (a cost where every
   // plan has new UV overlaps gets no point, with a warning).
   std::vector<double> curve_costs;
