@@ -365,7 +365,7 @@ struct Candidate {
   // texels, at most 32: twice as wide where the cap allows).
   bool wide_gutter = false;
   // The image's mip chain kept whole at the levels the gutter keeps apart (A = the largest
-  // power of two <= the gutter, atlas::mip_phase_align): sides multiples of A
+  // power of two <= the gutter that the block divides, atlas::mip_phase_align): sides multiples of A
   // (atlas::BudgetOptions::side_multiple) and the copied units' translations multiples of A
   // (atlas::ChartShape::align), so that a copied unit's texels at levels 1..log2 A are the
   // texels of the image it was copied from at those levels, not boxes of another phase.
