@@ -1427,7 +1427,7 @@ void choose_layout(Run& run, const std::vector<Candidate>& plans) {
   auto with_alignment = [&](Candidate c, uint32_t depth) -> std::optional<Candidate> {
     c.name += depth == 1 ? "+mip-aligned" : "+mip-aligned-deep", c.mip_aligned = true, c.mip_depth = depth;
     for (const Prepared& P : run.prepared)
-      if (atlas::mip_phase_align(budget_options(o, c, P.W, P.H).pack.gutter, o.block) > 1) return c;
+      if (budget_options(o, c, P.W, P.H).side_multiple > 1) return c;
     return std::nullopt;
   };
   if (scorer && o.max_gmsd <= 0 && o.size == 0 && o.candidates) {
