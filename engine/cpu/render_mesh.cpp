@@ -23,7 +23,7 @@ bool owns_edge(int32_t ax, int32_t ay, int32_t bx, int32_t by) {
   return dy > 0 || (dy == 0 && dx < 0);
 }
 
-float plane(const float c[3], float fx, float fy) {
+inline float plane(const float c[3], float fx, float fy) {
   float v = c[0] + c[1] * fx;
   v += c[2] * fy;
   return v;
@@ -69,8 +69,11 @@ struct Sampler {
   }
 
   // Adds weight x the bilinear sample of level `level` at level-0 texel coordinates (s, t)
-  // to out (first: out = instead of +=).
-  void bilinear(uint32_t level, float s, float t, float weight, float* out, bool first) const {
+  // to out (first: out = instead of +=). CC: the channel count (1..4), a constant so that
+  // the per-channel loop unrolls: eval samples ten textures of one channel a pixel, and the
+  // loop over a run-time count was a fifth of its sampling.
+  template <uint32_t CC>
+  __attribute__((always_inline)) void bilinear(uint32_t level, float s, float t, float weight, float* out, bool first) const {
     const Level& L = levels[level];
     const int32_t TW = L.width, TH = L.height;
     if (level > 0) {
@@ -94,7 +97,7 @@ struct Sampler {
       i0 = int32_t(fs0), j0 = int32_t(ft0);
       i1 = std::min(i0 + 1, TW - 1), j1 = std::min(j0 + 1, TH - 1);
     }
-    const uint32_t C = channels;
+    constexpr uint32_t C = CC;
     const float* t00 = L.texels + (size_t(j0) * size_t(TW) + size_t(i0)) * C;
     const float* t10 = L.texels + (size_t(j0) * size_t(TW) + size_t(i1)) * C;
     const float* t01 = L.texels + (size_t(j1) * size_t(TW) + size_t(i0)) * C;
@@ -115,16 +118,17 @@ struct Sampler {
 
   // The texture at texel coordinates (s, t), level of detail lambda (engine.h): level 0 when
   // lambda <= 0, else the two nearest levels blended.
-  void trilinear(float s, float t, float lambda, float* out) const {
+  template <uint32_t CC>
+  __attribute__((always_inline)) void trilinear(float s, float t, float lambda, float* out) const {
     const float lod = level_count > 1 ? std::min(lambda, float(level_count - 1)) : 0.0f;
     if (!(lod > 0.0f)) {
-      bilinear(0, s, t, 1.0f, out, true);
+      bilinear<CC>(0, s, t, 1.0f, out, true);
       return;
     }
     const uint32_t l0 = uint32_t(std::floor(lod)), l1 = std::min(l0 + 1, level_count - 1);
     const float f = lod - float(l0);
-    bilinear(l0, s, t, 1.0f - f, out, true);
-    bilinear(l1, s, t, f, out, false);
+    bilinear<CC>(l0, s, t, 1.0f - f, out, true);
+    bilinear<CC>(l1, s, t, f, out, false);
   }
 };
 
@@ -133,7 +137,7 @@ struct Sampler {
 struct Footprint {
   float s, t, lambda;
 };
-Footprint footprint(const MeshTriangle& r, float cx, float cy, bool mips) {
+__attribute__((always_inline)) inline Footprint footprint(const MeshTriangle& r, float cx, float cy, bool mips) {
   const float fx = cx - float(r.x0) * 0.0625f, fy = cy - float(r.y0) * 0.0625f;
   const float iw = plane(r.inv_w, fx, fy);
   Footprint f;
@@ -225,11 +229,26 @@ void visible_in_tile(const MeshRenderDesc& d, const ViewSetup& setup, uint32_t t
   }
 }
 
+// The m covered pixels of a tile (their footprints fp and positions at in the image)
+// sampled from texture x into out, CC channels a pixel.
+template <uint32_t CC>
+__attribute__((always_inline)) inline void sample_tile(const TextureInSpace& x, const Footprint* fp, const size_t* at, uint32_t m, float* out) {
+  if (x.same_space) {
+    for (uint32_t q = 0; q < m; ++q) x.sampler.trilinear<CC>(fp[q].s, fp[q].t, fp[q].lambda, out + at[q] * CC);
+    return;
+  }
+  // Texel centres of the texture: s_k + 0.5 = (s + 0.5) kx, as between mip levels.
+  for (uint32_t q = 0; q < m; ++q)
+    x.sampler.trilinear<CC>((fp[q].s + 0.5f) * x.kx - 0.5f, (fp[q].t + 0.5f) * x.ky - 0.5f, fp[q].lambda + x.lambda_offset,
+                            out + at[q] * CC);
+}
+
 // Shades tile (tx, ty) of one view for every texture: one visibility pass and one
 // footprint per pixel, then every texture sampled; writes coverage and pixels of the
 // view's image (the full width x height image of this view, not the batch), texture k's
 // pixels texture_stride floats after texture k - 1's. render_mesh.comp mirrors it, one
 // texture, operation for operation.
+__attribute__((target_clones("avx2", "default")))
 void shade_tile(const MeshRenderDesc& d, const std::vector<TextureInSpace>& textures, const ViewSetup& setup,
                 uint32_t tx, uint32_t ty, size_t texture_stride, uint32_t* coverage, float* pixels) {
   constexpr uint32_t T = shader::kMeshTile;
@@ -260,16 +279,13 @@ void shade_tile(const MeshRenderDesc& d, const std::vector<TextureInSpace>& text
       at[m] = p, fp[m] = footprint(r, float(i) + 0.5f, float(j) + 0.5f, mips), ++m;
     }
   for (size_t k = 0; k < textures.size(); ++k) {
-    const TextureInSpace& x = textures[k];
     float* out = pixels + k * texture_stride;
-    if (x.same_space) {
-      for (uint32_t q = 0; q < m; ++q) x.sampler.trilinear(fp[q].s, fp[q].t, fp[q].lambda, out + at[q] * C);
-      continue;
+    switch (C) {
+      case 1: sample_tile<1>(textures[k], fp, at, m, out); break;
+      case 2: sample_tile<2>(textures[k], fp, at, m, out); break;
+      case 3: sample_tile<3>(textures[k], fp, at, m, out); break;
+      default: sample_tile<4>(textures[k], fp, at, m, out); break;  // check_mesh_render: 1..4
     }
-    // Texel centres of the texture: s_k + 0.5 = (s + 0.5) kx, as between mip levels.
-    for (uint32_t q = 0; q < m; ++q)
-      x.sampler.trilinear((fp[q].s + 0.5f) * x.kx - 0.5f, (fp[q].t + 0.5f) * x.ky - 0.5f, fp[q].lambda + x.lambda_offset,
-                          out + at[q] * C);
   }
 }
 
