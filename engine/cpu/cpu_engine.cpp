@@ -67,6 +67,14 @@ class CpuEngine final : public Engine {
     return out;
   }
 
+  // cpu::gmsd<float> inlined into a clone for AVX2 where the CPU has it: its per-element
+  // loops run in wider lanes, the same fp32 operations per element (no contraction, sums
+  // in their order), so the same bits as the baseline build.
+  __attribute__((target_clones("avx2", "default"), flatten)) static float gmsd_pair(const float* a, const float* b,
+                                                                                   uint32_t w, uint32_t h) {
+    return cpu::gmsd<float>(a, b, w, h);
+  }
+
   std::vector<float> gmsd(const ImagePairs& p) override {
     constexpr size_t kSmallImage = 64 * 64;  // a view of the triangle stage
     std::vector<float> out(p.count);
@@ -74,13 +82,13 @@ class CpuEngine final : public Engine {
       std::vector<size_t> at(p.count + 1, 0);
       for (uint32_t k = 0; k < p.count; ++k) at[k + 1] = at[k] + p.pixels(k);
       parallel_for(p.count, threads_, [&](uint32_t k) {
-        out[k] = cpu::gmsd<float>(p.first + at[k], p.second + at[k], p.sizes[2 * k], p.sizes[2 * k + 1]);
+        out[k] = gmsd_pair(p.first + at[k], p.second + at[k], p.sizes[2 * k], p.sizes[2 * k + 1]);
       }, 1);
       return out;
     }
     const size_t n = size_t(p.width) * p.height;
     parallel_for(
-        p.count, threads_, [&](uint32_t k) { out[k] = cpu::gmsd<float>(p.first + k * n, p.second + k * n, p.width, p.height); },
+        p.count, threads_, [&](uint32_t k) { out[k] = gmsd_pair(p.first + k * n, p.second + k * n, p.width, p.height); },
         n > kSmallImage ? 1 : 8);
     return out;
   }

@@ -107,6 +107,15 @@ float decode(float v) {
   return atlas::srgb_to_linear(v);
 }
 
+// Every colour channel of `pixels` (C channels a texel) decoded from sRGB, texels spread
+// over the threads (each its own: the same result for any thread count).
+void decode_colour(std::vector<float>& pixels, uint32_t C) {
+  decode(0.0f);  // the table built before the threads share it
+#pragma omp parallel for schedule(static)
+  for (long k = 0; k < long(pixels.size()); ++k)
+    if (is_colour(uint32_t(size_t(k) % C), C)) pixels[size_t(k)] = decode(pixels[size_t(k)]);
+}
+
 // The two passes of a separable resize of `src` (w x h, C channels) to W x H: every input
 // row to the new width into rows of type Row, then the columns; each output is its own sum
 // in tap order, so the threads do not change the bits.
@@ -160,16 +169,16 @@ Image resize_lanczos3(const Image& in, uint32_t W, uint32_t H, bool linear_light
   std::vector<float> decoded;
   if (linear_light) {
     decoded = in.pixels;
-    for (size_t k = 0; k < decoded.size(); ++k)
-      if (is_colour(uint32_t(k % C), C)) decoded[k] = decode(decoded[k]);
+    decode_colour(decoded, C);
   }
   const float* src = linear_light ? decoded.data() : in.pixels.data();
   Image out = separable<float>(src, in.width, in.height, C, W, H, lanczos3_taps(in.width, W), lanczos3_taps(in.height, H),
                                in.bits);
-  for (size_t k = 0; k < out.pixels.size(); ++k) {
-    float v = std::clamp(out.pixels[k], 0.0f, 1.0f);  // Lanczos rings past the range at edges
-    if (linear_light && is_colour(uint32_t(k % C), C)) v = atlas::linear_to_srgb(v);
-    out.pixels[k] = v;
+#pragma omp parallel for schedule(static)
+  for (long k = 0; k < long(out.pixels.size()); ++k) {
+    float v = std::clamp(out.pixels[size_t(k)], 0.0f, 1.0f);  // Lanczos rings past the range at edges
+    if (linear_light && is_colour(uint32_t(size_t(k) % C), C)) v = atlas::linear_to_srgb(v);
+    out.pixels[size_t(k)] = v;
   }
   return out;
 }
@@ -181,15 +190,17 @@ std::vector<Image> mip_chain(const Image& image, uint32_t levels, bool colour) {
   if (levels == 1) return chain;
   const uint32_t C = image.channels;
   Image linear = image;
-  for (size_t k = 0; k < linear.pixels.size(); ++k)
-    if (colour && is_colour(uint32_t(k % C), C)) linear.pixels[k] = decode(linear.pixels[k]);
+  if (colour) decode_colour(linear.pixels, C);
   for (uint32_t l = 1; l < levels; ++l) {
     // From the level above, as glGenerateMipmap does: a quarter of the work of filtering
     // level 0 each time, the same 2 x 2 box for even sides.
     linear = resize_area(linear, std::max(1u, image.width >> l), std::max(1u, image.height >> l));
     Image level = linear;
-    for (size_t k = 0; k < level.pixels.size(); ++k)
-      if (colour && is_colour(uint32_t(k % C), C)) level.pixels[k] = atlas::linear_to_srgb(level.pixels[k]);
+    if (colour) {
+#pragma omp parallel for schedule(static)
+      for (long k = 0; k < long(level.pixels.size()); ++k)
+        if (is_colour(uint32_t(size_t(k) % C), C)) level.pixels[size_t(k)] = atlas::linear_to_srgb(level.pixels[size_t(k)]);
+    }
     chain.push_back(std::move(level));
   }
   return chain;
