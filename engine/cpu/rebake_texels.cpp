@@ -2,13 +2,12 @@
 // Engine::rebake_texels. Double precision throughout; every texel depends only on the
 // description, never on which thread ran it, so results are identical for any thread count.
 #include "backend.h"
+#include "parallel_for.h"
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <limits>
 #include <string>
-#include <thread>
 #include <vector>
 
 namespace uvpress::engine {
@@ -170,16 +169,7 @@ void rebake_texels_cpu(const RebakeTexelsDesc& d, float* texels, unsigned thread
       }
   };
 
-  const int tiles = tx * ty;
-  const unsigned n = std::max(1u, std::min<unsigned>(threads, unsigned(tiles)));
-  std::atomic<int> next{0};
-  auto work = [&] {
-    for (int tile; (tile = next.fetch_add(1)) < tiles;) run_tile(tile);
-  };
-  std::vector<std::thread> pool;
-  for (unsigned k = 1; k < n; ++k) pool.emplace_back(work);
-  work();
-  for (auto& th : pool) th.join();
+  parallel_for(uint32_t(tx * ty), threads, [&](uint32_t tile) { run_tile(int(tile)); }, 1);
 }
 
 }  // namespace uvpress::engine

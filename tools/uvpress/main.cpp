@@ -79,21 +79,6 @@ std::string human_bytes(uint64_t b) {
 
 }  // namespace uvpress::cli
 
-namespace {
-
-// libgomp reads OMP_WAIT_POLICY once, in its initializer. Its default spins idle OpenMP
-// threads, which on a small machine steal the cores from the engine's own threads between
-// parallel regions: the triangle stage ran 4x slower on 2 cores. The executable's
-// .preinit_array runs before any shared library's initializer, so passive waiting is made
-// the default there (a user's own choice is kept). This replaced a re-exec of the process
-// with the variable set, which loaded the 275 shared libraries twice: `uvpress --version`
-// 0.85 -> 0.46 s.
-void passive_openmp_by_default(int, char**, char**) { setenv("OMP_WAIT_POLICY", "passive", 0); }
-__attribute__((section(".preinit_array"), used)) void (*const preinit_passive_openmp)(int, char**, char**) =
-    passive_openmp_by_default;
-
-}  // namespace
-
 int main(int argc, char** argv) {
   using namespace uvpress;
   // A file-size limit (ulimit -f, a quota) then fails the write with EFBIG, which the
