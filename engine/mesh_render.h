@@ -31,6 +31,13 @@ struct ViewSetup {
 uint32_t tiles_x(const MeshRenderDesc& d);
 uint32_t tiles_y(const MeshRenderDesc& d);
 
+// Where camera c's image lies in a render's pixels (MeshRenderDesc::view_tiles_x/y): the
+// index of its pixel (0, 0) and the pixels a row of its view holds.
+struct ImagePlace {
+  size_t origin = 0, row_stride = 0;
+};
+ImagePlace image_place(const MeshRenderDesc& d, uint32_t c);
+
 ViewSetup setup_view(const MeshRenderDesc& d, uint32_t view);
 
 }  // namespace uvpress::engine::mesh

@@ -14,6 +14,8 @@ void check_mesh_render(const MeshRenderDesc& d) {
   if (d.width < 8 || d.height < 8 || d.width > mesh::kMaxSide || d.height > mesh::kMaxSide)
     throw EngineError("render_mesh: image sides must be 8..1024 pixels");
   if (d.channels < 1 || d.channels > 4) throw EngineError("render_mesh: 1..4 channels");
+  if (d.view_tiles_x < 1 || d.view_tiles_y < 1 || d.cameras.size() % (size_t(d.view_tiles_x) * d.view_tiles_y) != 0)
+    throw EngineError("render_mesh: the cameras must be whole views of view_tiles_x x view_tiles_y tiles");
   if (!d.texture || d.texture_width == 0 || d.texture_height == 0) throw EngineError("render_mesh: no texture");
   if (d.mip_levels < 1 || d.mip_levels > mip_chain_levels(d.texture_width, d.texture_height))
     throw EngineError("render_mesh: mip levels must be 1.." + std::to_string(mip_chain_levels(d.texture_width, d.texture_height)));
@@ -36,6 +38,16 @@ size_t mip_chain_texels(uint32_t width, uint32_t height, uint32_t levels) {
 }
 
 namespace mesh {
+
+ImagePlace image_place(const MeshRenderDesc& d, uint32_t c) {
+  const uint32_t per_view = d.view_tiles_x * d.view_tiles_y, t = c % per_view;
+  const size_t n = size_t(d.width) * d.height;
+  ImagePlace p;
+  p.row_stride = size_t(d.view_tiles_x) * d.width;
+  p.origin = size_t(c / per_view) * per_view * n + size_t(t / d.view_tiles_x) * d.height * p.row_stride +
+             size_t(t % d.view_tiles_x) * d.width;
+  return p;
+}
 
 uint32_t tiles_x(const MeshRenderDesc& d) { return (d.width + shader::kMeshTile - 1) / shader::kMeshTile; }
 uint32_t tiles_y(const MeshRenderDesc& d) { return (d.height + shader::kMeshTile - 1) / shader::kMeshTile; }

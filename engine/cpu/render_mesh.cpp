@@ -237,12 +237,13 @@ __attribute__((always_inline)) inline void sample_tile(const TextureInSpace& x, 
 
 // Shades tile (tx, ty) of one view for every texture: one visibility pass and one
 // footprint per pixel, then every texture sampled; writes coverage and pixels of the
-// view's image (the full width x height image of this view, not the batch), texture k's
-// pixels texture_stride floats after texture k - 1's. render_mesh.comp mirrors it, one
+// camera's image (width x height, at `coverage` and `pixels`, rows row_stride pixels apart:
+// a tile of a whole view, mesh::image_place), texture k's pixels texture_stride floats
+// after texture k - 1's. render_mesh.comp mirrors it, one
 // texture, operation for operation.
 __attribute__((target_clones("avx2", "default")))
 void shade_tile(const MeshRenderDesc& d, const std::vector<TextureInSpace>& textures, const ViewSetup& setup,
-                uint32_t tx, uint32_t ty, size_t texture_stride, uint32_t* coverage, float* pixels) {
+                uint32_t tx, uint32_t ty, size_t texture_stride, size_t row_stride, uint32_t* coverage, float* pixels) {
   constexpr uint32_t T = shader::kMeshTile;
   uint32_t best_of[T * T];
   visible_in_tile(d, setup, tx, ty, best_of);
@@ -260,7 +261,7 @@ void shade_tile(const MeshRenderDesc& d, const std::vector<TextureInSpace>& text
   for (uint32_t j = j0; j < j1; ++j)
     for (uint32_t i = i0; i < i1; ++i) {
       const uint32_t best = best_of[(j - j0) * T + (i - i0)];
-      const size_t p = size_t(j) * d.width + i;
+      const size_t p = size_t(j) * row_stride + i;
       if (best == kNoMeshTriangle) {
         coverage[p] = kNoMeshTriangle;
         empty_row[j - j0] = true;
@@ -281,7 +282,7 @@ void shade_tile(const MeshRenderDesc& d, const std::vector<TextureInSpace>& text
   for (size_t k = 0; k < textures.size(); ++k)
     for (uint32_t j = j0; j < j1; ++j) {
       if (!empty_row[j - j0]) continue;
-      float* row = pixels + k * texture_stride + (size_t(j) * d.width + i0) * C;
+      float* row = pixels + k * texture_stride + (size_t(j) * row_stride + i0) * C;
       if (!whole) {
         std::fill(row, row + row_floats, 0.0f);
         continue;
@@ -350,9 +351,10 @@ void render_on_cpu(const Engine& engine, const MeshRenderDesc& d, const std::vec
   parallel_for(out.count, threads, [&](uint32_t v) { setups[v] = mesh::setup_view(space, v); }, 1);
   parallel_for(out.count * ty, threads, [&](uint32_t item) {
     const uint32_t v = item / ty, row = item % ty;
+    const mesh::ImagePlace at = mesh::image_place(d, v);
     for (uint32_t a = 0; a < tx; ++a)
-      mesh::shade_tile(space, in_space, setups[v], a, row, stride, out.coverage.data() + v * n,
-                       out.pixels.data() + v * n * d.channels);
+      mesh::shade_tile(space, in_space, setups[v], a, row, stride, at.row_stride, out.coverage.data() + at.origin,
+                       out.pixels.data() + at.origin * d.channels);
   }, 1);
 }
 

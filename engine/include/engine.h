@@ -136,6 +136,12 @@ struct MeshRenderDesc {
   // light), as an engine's mip generation would.
   uint32_t mip_levels = 1;
   bool repeat = false;  // REPEAT wrapping on both axes, else clamp-to-edge
+  // Views in tiles: each run of view_tiles_x * view_tiles_y cameras renders the tiles of one
+  // view (row-major, each width x height), and MeshRenders holds the view whole
+  // (view_tiles_x * width pixels a row), every tile in its place: views wider than
+  // kMeshRenderMaxSide (eval's) without a copy of every pixel to stitch them. 1 x 1 (the
+  // default): every camera is an image of its own. The cameras must be whole runs.
+  uint32_t view_tiles_x = 1, view_tiles_y = 1;
 };
 
 // Texels in the first `levels` levels of a width x height mip chain (sizes as above).
@@ -178,7 +184,8 @@ using UninitializedVector = std::vector<T, UninitializedAllocator<T>>;
 // Renders, view after view: coverage (triangle index, kNoMeshTriangle where empty) and
 // `channels` floats a pixel; with several textures (render_mesh_textures) the pixels hold
 // every view of the first texture, then every view of the next, coverage once. Every
-// element is written by the render.
+// element is written by the render. width, height and count are the cameras' (tiles', with
+// MeshRenderDesc::view_tiles_x/y: the pixels are the same in number, laid out as whole views).
 struct MeshRenders {
   uint32_t width = 0, height = 0, count = 0, channels = 0, textures = 1;
   UninitializedVector<uint32_t> coverage;

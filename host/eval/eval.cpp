@@ -437,11 +437,20 @@ void render_views(engine::Engine& engine, const LayoutMesh& m, const std::vector
     d.width = f0.tile_width(), d.height = f0.tile_height();
     d.cameras.clear();
     bool tiled = false;
+    // Tiles that cover each view exactly, the same grid for every view of the chunk: the
+    // engine lays them out as whole views itself (MeshRenderDesc::view_tiles_x), else they
+    // are stitched below.
+    bool in_place = true;
     for (size_t v = first; v < first + views; ++v) {
-      tiled = tiled || frames[v].tiles_x * frames[v].tiles_y > 1;
-      for (uint32_t b = 0; b < frames[v].tiles_y; ++b)
-        for (uint32_t a = 0; a < frames[v].tiles_x; ++a) d.cameras.push_back(frames[v].tile(a, b));
+      const ViewFrame& f = frames[v];
+      tiled = tiled || f.tiles_x * f.tiles_y > 1;
+      in_place = in_place && f.tiles_x == f0.tiles_x && f.tiles_y == f0.tiles_y &&
+                 f.tiles_x * f.tile_width() == f.width && f.tiles_y * f.tile_height() == f.height;
+      for (uint32_t b = 0; b < f.tiles_y; ++b)
+        for (uint32_t a = 0; a < f.tiles_x; ++a) d.cameras.push_back(f.tile(a, b));
     }
+    in_place = in_place && tiled;
+    d.view_tiles_x = in_place ? f0.tiles_x : 1, d.view_tiles_y = in_place ? f0.tiles_y : 1;
     const Stopwatch t_render;
     if (K == 1)
       engine.render_mesh(d, r);
@@ -449,7 +458,7 @@ void render_views(engine::Engine& engine, const LayoutMesh& m, const std::vector
       engine.render_mesh_textures(d, mesh_textures, r);
     timing.render += t_render.seconds();
     const size_t T = size_t(d.width) * d.height, rendered = T * d.cameras.size();  // pixels a texture
-    if (!tiled) {
+    if (!tiled || in_place) {
       for (size_t k = 0; k < K; ++k) fn(first, views, k, r.pixels.data() + k * rendered * C, r.coverage.data());
       first += views;
       continue;

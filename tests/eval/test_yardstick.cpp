@@ -259,6 +259,54 @@ TEST_CASE("render_mesh: a view rendered as 2 x 2 tiles is the whole view, triang
   CHECK(sum / double(same) < 1e-4);
 }
 
+TEST_CASE("render_mesh: view_tiles lays each view's tiles out whole, the same pixels as the tiles stitched by hand",
+          "[eval][engine]") {
+  const DemoViews demo(2);
+  const auto& cams = demo.cameras;
+  engine::MeshRenderDesc d = demo.desc();
+  const uint32_t k = 4, T = 256;  // 4 x 4 tiles of a 1024-px view, two views
+  d.width = d.height = T;
+  for (size_t v : {0, 7})
+    for (uint32_t b = 0; b < k; ++b)
+      for (uint32_t a = 0; a < k; ++a) d.cameras.push_back(eval::tile_camera(cams[v], k, a, b));
+  auto check = [&](engine::Engine& e, const char* name) {
+    const auto tiles = e.render_mesh(d);
+    engine::MeshRenderDesc w = d;
+    w.view_tiles_x = w.view_tiles_y = k;
+    const auto whole = e.render_mesh(w);
+    REQUIRE(whole.pixels.size() == tiles.pixels.size());
+    size_t moved = 0, covered = 0;
+    for (uint32_t v = 0; v < 2; ++v)
+      for (uint32_t b = 0; b < k; ++b)
+        for (uint32_t a = 0; a < k; ++a)
+          for (uint32_t j = 0; j < T; ++j)
+            for (uint32_t i = 0; i < T; ++i) {
+              const size_t t = ((size_t(v) * k + b) * k + a) * T * T + size_t(j) * T + i;
+              const size_t at = size_t(v) * k * k * T * T + (size_t(b) * T + j) * k * T + size_t(a) * T + i;
+              moved += whole.coverage[at] != tiles.coverage[t] || whole.pixels[at] != tiles.pixels[t];
+              covered += whole.coverage[at] != engine::kNoMeshTriangle;
+            }
+    INFO(name << ": " << moved << " pixels differ from the tiles stitched by hand");
+    CHECK(moved == 0);
+    CHECK(covered > size_t(2) * k * k * T * T / 4);
+    // A camera list that is not whole views is refused.
+    w.cameras.pop_back();
+    CHECK_THROWS_AS(e.render_mesh(w), engine::EngineError);
+  };
+  auto cpu = engine::make_cpu_engine({});
+  check(*cpu, "cpu");
+  std::unique_ptr<engine::Engine> vk;
+  try {
+    vk = test::lavapipe();
+  } catch (const engine::EngineError& e) {
+    WARN(std::string("no lavapipe, the Vulkan half skipped: ") + e.what());
+  }
+  if (vk) {
+    check(*vk, "lavapipe");
+    CHECK(vk->validation_errors() == 0);
+  }
+}
+
 TEST_CASE("eval: auto resolution resolves single-texel detail that 512-px views minify", "[eval]") {
   // A 512^2 texture of single-texel noise on the demo sheet: the 512-px views minify it
   // (1.6 texels a pixel at the median, 3 at the 95th percentile).
