@@ -213,6 +213,31 @@ TEST_CASE("render_mesh: Vulkan (lavapipe, validation on) matches the CPU oracle 
   CHECK(vk->validation_errors() == 0);
 }
 
+namespace {
+
+// The tile cameras of `views` k x k-tiled views (row-major per view), and fn(t, w) for every
+// pixel: its index t in the render of those cameras (T x T a tile) and w in the views laid
+// out whole (k T pixels a row).
+std::vector<std::array<float, 16>> tile_cameras(const std::vector<std::array<float, 16>>& views, uint32_t k) {
+  std::vector<std::array<float, 16>> out;
+  for (const auto& m : views)
+    for (uint32_t b = 0; b < k; ++b)
+      for (uint32_t a = 0; a < k; ++a) out.push_back(eval::tile_camera(m, k, a, b));
+  return out;
+}
+template <class Fn>
+void for_each_tile_pixel(size_t views, uint32_t k, uint32_t T, Fn&& fn) {
+  for (size_t v = 0; v < views; ++v)
+    for (uint32_t b = 0; b < k; ++b)
+      for (uint32_t a = 0; a < k; ++a)
+        for (uint32_t j = 0; j < T; ++j)
+          for (uint32_t i = 0; i < T; ++i)
+            fn(((v * k + b) * k + a) * T * T + size_t(j) * T + i,
+               v * k * k * T * T + (size_t(b) * T + j) * k * T + size_t(a) * T + i);
+}
+
+}  // namespace
+
 TEST_CASE("render_mesh: a view rendered as 2 x 2 tiles is the whole view, triangles past the guard band are clipped",
           "[eval][engine]") {
   auto cpu = engine::make_cpu_engine({});
@@ -225,28 +250,19 @@ TEST_CASE("render_mesh: a view rendered as 2 x 2 tiles is the whole view, triang
   // 4 x 4 tiles of 256: a triangle spans far more than the guard band (256 px) past a tile.
   const uint32_t k = 4, T = 256;
   d.width = d.height = T;
-  d.cameras.clear();
-  for (size_t v : {0, 7})
-    for (uint32_t b = 0; b < k; ++b)
-      for (uint32_t a = 0; a < k; ++a) d.cameras.push_back(eval::tile_camera(cams[v], k, a, b));
+  d.cameras = tile_cameras({cams[0], cams[7]}, k);
   const auto tiles = cpu->render_mesh(d);
   size_t same = 0, covered = 0, total = 0;
   float worst = 0;
   double sum = 0;
-  for (uint32_t v = 0; v < 2; ++v)
-    for (uint32_t b = 0; b < k; ++b)
-      for (uint32_t a = 0; a < k; ++a)
-        for (uint32_t j = 0; j < T; ++j)
-          for (uint32_t i = 0; i < T; ++i) {
-            const size_t t = ((size_t(v) * k + b) * k + a) * T * T + size_t(j) * T + i;
-            const size_t w = size_t(v) * 1024 * 1024 + (size_t(b) * T + j) * 1024 + size_t(a) * T + i;
-            ++total;
-            covered += whole.coverage[w] != engine::kNoMeshTriangle;
-            if (tiles.coverage[t] != whole.coverage[w]) continue;
-            ++same;
-            worst = std::max(worst, std::abs(tiles.pixels[t] - whole.pixels[w]));
-            sum += std::abs(tiles.pixels[t] - whole.pixels[w]);
-          }
+  for_each_tile_pixel(2, k, T, [&](size_t t, size_t w) {
+    ++total;
+    covered += whole.coverage[w] != engine::kNoMeshTriangle;
+    if (tiles.coverage[t] != whole.coverage[w]) return;
+    ++same;
+    worst = std::max(worst, std::abs(tiles.pixels[t] - whole.pixels[w]));
+    sum += std::abs(tiles.pixels[t] - whole.pixels[w]);
+  });
   INFO(same << " of " << total << " pixels with the same coverage; value difference worst " << worst << ", mean "
             << sum / double(same));
   CHECK(covered > total / 4);
@@ -266,9 +282,7 @@ TEST_CASE("render_mesh: view_tiles lays each view's tiles out whole, the same pi
   engine::MeshRenderDesc d = demo.desc();
   const uint32_t k = 4, T = 256;  // 4 x 4 tiles of a 1024-px view, two views
   d.width = d.height = T;
-  for (size_t v : {0, 7})
-    for (uint32_t b = 0; b < k; ++b)
-      for (uint32_t a = 0; a < k; ++a) d.cameras.push_back(eval::tile_camera(cams[v], k, a, b));
+  d.cameras = tile_cameras({cams[0], cams[7]}, k);
   auto check = [&](engine::Engine& e, const char* name) {
     const auto tiles = e.render_mesh(d);
     engine::MeshRenderDesc w = d;
@@ -276,16 +290,10 @@ TEST_CASE("render_mesh: view_tiles lays each view's tiles out whole, the same pi
     const auto whole = e.render_mesh(w);
     REQUIRE(whole.pixels.size() == tiles.pixels.size());
     size_t moved = 0, covered = 0;
-    for (uint32_t v = 0; v < 2; ++v)
-      for (uint32_t b = 0; b < k; ++b)
-        for (uint32_t a = 0; a < k; ++a)
-          for (uint32_t j = 0; j < T; ++j)
-            for (uint32_t i = 0; i < T; ++i) {
-              const size_t t = ((size_t(v) * k + b) * k + a) * T * T + size_t(j) * T + i;
-              const size_t at = size_t(v) * k * k * T * T + (size_t(b) * T + j) * k * T + size_t(a) * T + i;
-              moved += whole.coverage[at] != tiles.coverage[t] || whole.pixels[at] != tiles.pixels[t];
-              covered += whole.coverage[at] != engine::kNoMeshTriangle;
-            }
+    for_each_tile_pixel(2, k, T, [&](size_t t, size_t at) {
+      moved += whole.coverage[at] != tiles.coverage[t] || whole.pixels[at] != tiles.pixels[t];
+      covered += whole.coverage[at] != engine::kNoMeshTriangle;
+    });
     INFO(name << ": " << moved << " pixels differ from the tiles stitched by hand");
     CHECK(moved == 0);
     CHECK(covered > size_t(2) * k * k * T * T / 4);
