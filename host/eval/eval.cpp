@@ -20,7 +20,9 @@
 //   rolled crops reach 3440 (95 %) with 5.2 M pixels a view. Cropping drops background
 //   pixels from each view's GMSD pool, so it is used only where the cap binds: every other
 //   asset's figures stay as they were. Views wider than the engine's 1024-px limit are
-//   rendered in tiles (one camera a tile, all tiles of a view one size) and stitched.
+//   rendered in tiles (one camera a tile, all tiles of a view one size), which the engine
+//   lays out as whole views (MeshRenderDesc::view_tiles_x), or eval stitches where the views
+//   of a render differ in their grid.
 //   Report: resolution (the whole view's side), resolution_capped (the wanted side was not
 //   reached), resolution_cropped, view_pixels (rendered a view, on average),
 //   texels_per_pixel (at the percentile and the median, at the chosen side),
