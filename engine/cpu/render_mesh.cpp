@@ -65,7 +65,8 @@ struct Sampler {
   // the per-channel loop unrolls: eval samples ten textures of one channel a pixel, and the
   // loop over a run-time count was a fifth of its sampling.
   template <uint32_t CC>
-  __attribute__((always_inline)) void bilinear(uint32_t level, float s, float t, float weight, float* out, bool first) const {
+  __attribute__((always_inline)) void bilinear(uint32_t level, float s, float t, float weight, float* out,
+                                               bool first) const {
     const Level& L = levels[level];
     const int32_t TW = L.width, TH = L.height;
     if (level > 0) {
@@ -224,7 +225,8 @@ void visible_in_tile(const MeshRenderDesc& d, const ViewSetup& setup, uint32_t t
 // The m covered pixels of a tile (their footprints fp and positions at in the image)
 // sampled from texture x into out, CC channels a pixel.
 template <uint32_t CC>
-__attribute__((always_inline)) inline void sample_tile(const TextureInSpace& x, const Footprint* fp, const size_t* at, uint32_t m, float* out) {
+__attribute__((always_inline)) inline void sample_tile(const TextureInSpace& x, const Footprint* fp, const size_t* at,
+                                                       uint32_t m, float* out) {
   if (x.same_space) {
     for (uint32_t q = 0; q < m; ++q) x.sampler.trilinear<CC>(fp[q].s, fp[q].t, fp[q].lambda, out + at[q] * CC);
     return;
@@ -239,8 +241,7 @@ __attribute__((always_inline)) inline void sample_tile(const TextureInSpace& x, 
 // footprint per pixel, then every texture sampled; writes coverage and pixels of the
 // camera's image (width x height, at `coverage` and `pixels`, rows row_stride pixels apart:
 // a tile of a whole view, mesh::image_place), texture k's pixels texture_stride floats
-// after texture k - 1's. render_mesh.comp mirrors it, one
-// texture, operation for operation.
+// after texture k - 1's. render_mesh.comp mirrors it, one texture, operation for operation.
 __attribute__((target_clones("avx2", "default")))
 void shade_tile(const MeshRenderDesc& d, const std::vector<TextureInSpace>& textures, const ViewSetup& setup,
                 uint32_t tx, uint32_t ty, size_t texture_stride, size_t row_stride, uint32_t* coverage, float* pixels) {
@@ -274,9 +275,9 @@ void shade_tile(const MeshRenderDesc& d, const std::vector<TextureInSpace>& text
   // Empty pixels are 0: each tile row that has one is cleared whole, texture by texture,
   // and its covered pixels then sampled over it. One contiguous run a row instead of a
   // store a pixel into every texture's image in turn (those scattered stores were a third
-  // of the shading time of eval's ten-texture renders).
-  // A whole tile's row is a constant size, which the compiler clears with a few vector
-  // stores (a memset call a row cost as much as it saved).
+  // of the shading time of eval's ten-texture renders). A whole tile's row is a constant
+  // size, which the compiler clears with a few vector stores (a memset call a row cost as
+  // much as it saved).
   const size_t row_floats = size_t(i1 - i0) * C;
   const bool whole = i1 - i0 == T;
   for (size_t k = 0; k < textures.size(); ++k)
