@@ -15,7 +15,7 @@ namespace uvpress::engine {
 //
 // The threads are OpenMP's, the host's pool (DESIGN: one threading library): threads of
 // the engine's own beside it left both pools' threads competing for the cores, libgomp's
-// waiting ones spinning (Duck's eval --flatten: 11 % of its samples in libgomp's spin).
+// waiting ones spinning (Fox's eval --flatten: 11 % of its samples in libgomp's spin).
 // Inside an active OpenMP region (nested) the loop runs on the calling thread alone.
 template <class Fn>
 void parallel_for(uint32_t n, unsigned threads, Fn fn, uint32_t block = 8) {

@@ -62,8 +62,8 @@ struct Sampler {
 
   // Adds weight x the bilinear sample of level `level` at level-0 texel coordinates (s, t)
   // to out (first: out = instead of +=). CC: the channel count (1..4), a constant so that
-  // the per-channel loop unrolls: eval samples ten textures of one channel a pixel, and the
-  // loop over a run-time count was a fifth of its sampling.
+  // the per-channel loop unrolls: eval samples ten textures of one channel a pixel (Duck's
+  // eval --flatten went 10.0 -> 7.9-8.5 s with this change alone).
   template <uint32_t CC>
   __attribute__((always_inline)) void bilinear(uint32_t level, float s, float t, float weight, float* out,
                                                bool first) const {

@@ -2,6 +2,7 @@
 #include "resize.h"
 
 #include "atlas/rebake.h"
+#include "core/parallel.h"
 
 #include <algorithm>
 #include <cmath>
@@ -111,7 +112,7 @@ float decode(float v) {
 // over the threads (each its own: the same result for any thread count).
 void decode_colour(std::vector<float>& pixels, uint32_t C) {
   decode(0.0f);  // the table built before the threads share it
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (worth_threads(long(pixels.size())))
   for (long k = 0; k < long(pixels.size()); ++k)
     if (is_colour(uint32_t(size_t(k) % C), C)) pixels[size_t(k)] = decode(pixels[size_t(k)]);
 }
@@ -174,7 +175,7 @@ Image resize_lanczos3(const Image& in, uint32_t W, uint32_t H, bool linear_light
   const float* src = linear_light ? decoded.data() : in.pixels.data();
   Image out = separable<float>(src, in.width, in.height, C, W, H, lanczos3_taps(in.width, W), lanczos3_taps(in.height, H),
                                in.bits);
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (worth_threads(long(out.pixels.size())))
   for (long k = 0; k < long(out.pixels.size()); ++k) {
     float v = std::clamp(out.pixels[size_t(k)], 0.0f, 1.0f);  // Lanczos rings past the range at edges
     if (linear_light && is_colour(uint32_t(size_t(k) % C), C)) v = atlas::linear_to_srgb(v);
@@ -197,7 +198,7 @@ std::vector<Image> mip_chain(const Image& image, uint32_t levels, bool colour) {
     linear = resize_area(linear, std::max(1u, image.width >> l), std::max(1u, image.height >> l));
     Image level = linear;
     if (colour) {
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (worth_threads(long(level.pixels.size())))
       for (long k = 0; k < long(level.pixels.size()); ++k)
         if (is_colour(uint32_t(size_t(k) % C), C)) level.pixels[size_t(k)] = atlas::linear_to_srgb(level.pixels[size_t(k)]);
     }
