@@ -1316,8 +1316,10 @@ size_t consider_candidate(Run& run, const Candidate& c) {
   Realized r = realize(run.asset, run.layouts, run.prepared, run.layout_base, f, run.engine, run.o, c, run.progress,
                        run.warnings);
   run.t_build += t0.seconds();
+  const Stopwatch t1;
   if (run.scorer && r.overlaps_new == 0) r.q = score(run, f, r.name).q;
-  run.result.candidates.push_back({r.name, r.old_texels > 0 ? r.new_texels / r.old_texels : 1.0, r.q, r.overlaps_new});
+  run.result.candidates.push_back({r.name, r.old_texels > 0 ? r.new_texels / r.old_texels : 1.0, r.q, r.overlaps_new,
+                                   r.t_mesh, r.t_pack, r.t_bake, t1.seconds()});
   const size_t unreshaped = r.unreshaped_units;
   // New UV overlaps disqualify a layout whatever its score: never written.
   if (r.overlaps_new > 0) return unreshaped;

@@ -100,6 +100,8 @@ struct CandidateScore {
   double cost_ratio = 1;    // new image texels / old
   double q = -1;            // 20-view q as written; < 0: not scored
   size_t overlaps_new = 0;  // > 0: disqualified, never written
+  // Wall seconds: mesh stage, packing, re-bake (every image), scoring as written.
+  double seconds_mesh = 0, seconds_pack = 0, seconds_bake = 0, seconds_score = 0;
 };
 
 // The never-worse guard (report: guard): the kept layout against the input resized

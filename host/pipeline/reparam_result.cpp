@@ -149,7 +149,11 @@ json ReparamResult::to_json() const {
     report["candidates"].push_back({{"name", c.name},
                                     {"cost_ratio", c.cost_ratio},
                                     {"q", c.q >= 0 ? json(c.q) : json(nullptr)},
-                                    {"overlaps_new", c.overlaps_new}});
+                                    {"overlaps_new", c.overlaps_new},
+                                    {"seconds", {{"mesh_stage", c.seconds_mesh},
+                                                 {"pack", c.seconds_pack},
+                                                 {"rebake", c.seconds_bake},
+                                                 {"score", c.seconds_score}}}});
   if (guard.ran)
     report["guard"] = {{"q_reparam", guard.q_reparam}, {"q_resize", guard.q_resize}, {"resize", "lanczos3-srgb"},
                        {"chosen", guard.chosen}};

@@ -411,6 +411,18 @@ TEST_CASE("reparam on the demo asset at half the texels beats the plain resize b
   CHECK(report["layouts"][0]["exact_units"] == 0);
   CHECK(candidate_score(report, base + "+least-squares").first > 0);
   CHECK(candidate_score(report, base + "+least-squares-resampled").first == -1.0);
+  // Each candidate's own seconds: its parts of the stages' totals, which they add up to.
+  double built = 0, scored = 0;
+  for (const auto& c : report["candidates"]) {
+    const auto& t = c["seconds"];
+    for (const char* k : {"mesh_stage", "pack", "rebake", "score"}) CHECK(t[k].get<double>() >= 0);
+    built += t["mesh_stage"].get<double>() + t["pack"].get<double>() + t["rebake"].get<double>();
+    scored += t["score"].get<double>();
+  }
+  CHECK(built > 0);
+  CHECK(built <= report["stages"]["candidates_built"].get<double>());
+  CHECK(scored > 0);
+  CHECK(scored <= report["stages"]["candidates_and_guard"].get<double>());
 }
 
 TEST_CASE("reparam on Duck at half the texels: gutters and mip alignment built, the best written, beating the resize",
