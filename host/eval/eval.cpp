@@ -402,6 +402,19 @@ struct RenderScratch {
   engine::MeshRenders renders;
   engine::UninitializedVector<float> pixels;  // stitched views: every pixel written (or assigned 0)
   engine::UninitializedVector<uint32_t> coverage;
+
+  // Room for n elements in v, whose contents are not kept. A vector that grows copies
+  // itself into fresh pages, and on these VMs a page's first touch costs about 40 times a
+  // later write (1 GiB: 1.5-1.9 s to touch in huge pages, 0.05 s to set again): freed
+  // first, then at least twice the old room (untouched room costs nothing), so that
+  // renders of a few sizes settle in one buffer.
+  template <class V>
+  static void hold(V& v, size_t n) {
+    if (v.capacity() >= n) return;
+    const size_t room = std::max(n, 2 * v.capacity());
+    v.clear(), v.shrink_to_fit();
+    v.reserve(room);
+  }
 };
 
 // Renders every view of `m` once per texture of `textures`, chunk by chunk: fn(first view,
@@ -429,6 +442,10 @@ void render_views(engine::Engine& engine, const LayoutMesh& m, const std::vector
   engine::MeshRenders& r = scratch.renders;
   auto& stitched = scratch.pixels;
   auto& stitched_coverage = scratch.coverage;
+  // The chunks (first view, views) first, so that the storage is sized once for the largest:
+  // a buffer that grows is copied into fresh pages, each touched for the first time.
+  std::vector<std::pair<size_t, size_t>> chunks;
+  size_t most = 0;  // rendered pixels of the largest chunk, a texture
   for (size_t first = 0; first < frames.size();) {
     const ViewFrame& f0 = frames[first];
     const size_t limit = per_chunk ? per_chunk : std::max<size_t>(1, kChunkPixels / (f0.pixels() * K));
@@ -436,6 +453,17 @@ void render_views(engine::Engine& engine, const LayoutMesh& m, const std::vector
     while (first + views < frames.size() && views < limit && frames[first + views].tile_width() == f0.tile_width() &&
            frames[first + views].tile_height() == f0.tile_height())
       ++views;
+    size_t pixels = 0;
+    for (size_t v = first; v < first + views; ++v)
+      pixels += size_t(f0.tile_width()) * f0.tile_height() * frames[v].tiles_x * frames[v].tiles_y;
+    chunks.emplace_back(first, views);
+    most = std::max(most, pixels);
+    first += views;
+  }
+  scratch.hold(r.pixels, most * C * K);
+  scratch.hold(r.coverage, most);
+  for (const auto& [first, views] : chunks) {
+    const ViewFrame& f0 = frames[first];
     d.width = f0.tile_width(), d.height = f0.tile_height();
     d.cameras.clear();
     bool tiled = false;
@@ -462,7 +490,6 @@ void render_views(engine::Engine& engine, const LayoutMesh& m, const std::vector
     const size_t T = size_t(d.width) * d.height, rendered = T * d.cameras.size();  // pixels a texture
     if (!tiled || in_place) {
       for (size_t k = 0; k < K; ++k) fn(first, views, k, r.pixels.data() + k * rendered * C, r.coverage.data());
-      first += views;
       continue;
     }
     const size_t base = f0.offset;
@@ -508,7 +535,6 @@ void render_views(engine::Engine& engine, const LayoutMesh& m, const std::vector
       }
       fn(first, views, k, stitched.data(), stitched_coverage.data());
     }
-    first += views;
   }
 }
 
@@ -577,11 +603,13 @@ struct Setup {
   std::string shading_warning;   // auto fell back to unlit: why
   LightRig rig;
   ReferenceViews ref_views;
-  // render_views' storage, kept across costs and candidates: the views' renders, the maps'
-  // renders nested inside them when lit, renders of many textures at once and of a pair
-  // (score_against_own_reference), each kept apart: a vector that shrinks and grows again
-  // zeroes what it regrows. Setup serves one thread at a time.
-  mutable RenderScratch view_scratch, map_scratch, many_scratch, pair_scratch;
+  // render_views' storage, kept across costs and candidates: every render's, and the maps'
+  // renders nested inside the views' when lit. One buffer for all the renders that do not
+  // nest: on these VMs a page's first touch costs about 40 times a later write of it (1 GiB
+  // took 1.5-1.9 s to touch with huge pages, 0.05 s to set again), and Fox's eval --flatten
+  // held three of them (views, many textures, a pair) of up to 180 MB each. Setup serves
+  // one thread at a time.
+  mutable RenderScratch scratch, map_scratch;
   double image_texels = 0, chart_texels = 0;
   double radius = 0;  // the largest extent of the bounding box
   std::optional<io::AstcOptions> codec;  // EvalOptions::codec
@@ -622,7 +650,7 @@ template <class Fn>
 void render_scored_views(engine::Engine& engine, const Setup& s, const LayoutMesh& m, const LayoutTextures& tex,
                          const std::vector<ViewFrame>& frames, Timing& timing, Fn&& fn) {
   if (!s.lit) {
-    render_views(engine, m, tex.driving, frames, timing, s.view_scratch,
+    render_views(engine, m, tex.driving, frames, timing, s.scratch,
                  [&](size_t first, size_t views, const float* px, const uint32_t*) { fn(first, views, px, nullptr); });
     return;
   }
@@ -634,7 +662,7 @@ void render_scored_views(engine::Engine& engine, const Setup& s, const LayoutMes
   std::vector<std::vector<float>> map_px(tex.maps.size());
   std::vector<float> lit;
   render_views(
-      engine, m, tex.driving, frames, timing, s.view_scratch,
+      engine, m, tex.driving, frames, timing, s.scratch,
       [&](size_t first, size_t views, const float* px, const uint32_t* coverage) {
         const std::vector<ViewFrame> chunk(frames.begin() + long(first), frames.begin() + long(first + views));
         const size_t base = chunk.front().offset, n = total_pixels(chunk) - base;
@@ -708,7 +736,7 @@ std::vector<Scores> score_views_many(engine::Engine& engine, const Setup& s, con
     std::vector<std::vector<float>> g(e - b, std::vector<float>(views.size()));
     // At least two views a chunk: GMSD runs a call's views in parallel.
     const size_t per_chunk = std::max<size_t>(2, 2 * kChunkPixels / (largest * driving.size()));
-    render_views(engine, m, driving, views, timing, s.many_scratch,
+    render_views(engine, m, driving, views, timing, s.scratch,
                  [&](size_t first, size_t count, size_t k, const float* px, const uint32_t*) {
                    gmsd_views(engine, s.ref_views.unlit.data() + views[first].offset, px, &views[first], count,
                               g[k].data() + first, timing);
@@ -796,7 +824,7 @@ Scores score_against_own_reference(engine::Engine& engine, const Setup& s, const
     return score_views(engine, s, m, tex, timing, &frames, &ref);
   }
   std::vector<float> g(frames.size()), ref_chunk;
-  render_views(engine, m, {&reference.driving, &tex.driving}, frames, timing, s.pair_scratch,
+  render_views(engine, m, {&reference.driving, &tex.driving}, frames, timing, s.scratch,
                [&](size_t first, size_t count, size_t k, const float* px, const uint32_t*) {
                  const size_t n = frames[first + count - 1].offset + frames[first + count - 1].pixels() - frames[first].offset;
                  if (k == 0) {
