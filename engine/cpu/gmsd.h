@@ -13,55 +13,44 @@
 
 namespace uvpress::engine::cpu {
 
+// The stages of gmsd() below, each a pure function per element (so that any split of them
+// gives the same bits): the 2 x 2 mean, stride 2 with zero padding, of img (width x height)
+// into d ((width + 1) / 2 x (height + 1) / 2).
 template <class Real>
-Real gmsd(const Real* a, const Real* b, uint32_t width, uint32_t height) {
+void gmsd_downsample(const Real* img, uint32_t width, uint32_t height, Real* d) {
   const uint32_t w = (width + 1) / 2, h = (height + 1) / 2;
-  const size_t n = size_t(w) * h;
-  if (n < 2) return Real(0);
-  // Every element is written before it is read. The buffers are the thread's own and kept
-  // from call to call: fresh ones for eval's 1696-px views were mapped and page-faulted
-  // anew on every call, a third of the time of this function; not zeroed when they grow.
-  thread_local UninitializedVector<Real> scratch;
-  if (scratch.size() < 3 * n) scratch.resize(3 * n);
-  Real* const d1 = scratch.data();
-  Real* const d2 = d1 + n;
-  Real* const gms = d2 + n;
-  auto y = [&](const Real* img, uint32_t x, uint32_t yy) {
-    return (x < width && yy < height) ? img[size_t(yy) * width + x] : Real(0);
-  };
-  auto mean4 = [&](const Real* img, uint32_t i, uint32_t j) {
-    Real s = y(img, 2 * i, 2 * j) + y(img, 2 * i + 1, 2 * j);
-    s += y(img, 2 * i, 2 * j + 1);
-    s += y(img, 2 * i + 1, 2 * j + 1);
-    return Real(0.25) * s;
-  };
+  auto y = [&](uint32_t x, uint32_t yy) { return (x < width && yy < height) ? img[size_t(yy) * width + x] : Real(0); };
   // The 2 x 2 blocks wholly inside the image first, without bounds checks, so that the
   // compiler runs them in vector lanes (the same operations in the same order per element:
   // the same bits as the checked form, which takes the last row and column of odd sizes).
   const uint32_t wf = width / 2, hf = height / 2;
   for (uint32_t j = 0; j < h; ++j) {
-    Real* o1 = &d1[size_t(j) * w];
-    Real* o2 = &d2[size_t(j) * w];
+    Real* o = &d[size_t(j) * w];
     uint32_t i0 = 0;
     if (j < hf) {
-      const Real *a0 = a + size_t(2 * j) * width, *a1 = a0 + width, *b0 = b + size_t(2 * j) * width, *b1 = b0 + width;
+      const Real *a0 = img + size_t(2 * j) * width, *a1 = a0 + width;
       for (uint32_t i = 0; i < wf; ++i) {
-        Real s1 = a0[2 * i] + a0[2 * i + 1];
-        s1 += a1[2 * i];
-        s1 += a1[2 * i + 1];
-        Real s2 = b0[2 * i] + b0[2 * i + 1];
-        s2 += b1[2 * i];
-        s2 += b1[2 * i + 1];
-        o1[i] = Real(0.25) * s1;
-        o2[i] = Real(0.25) * s2;
+        Real s = a0[2 * i] + a0[2 * i + 1];
+        s += a1[2 * i];
+        s += a1[2 * i + 1];
+        o[i] = Real(0.25) * s;
       }
       i0 = wf;
     }
-    for (uint32_t i = i0; i < w; ++i) o1[i] = mean4(a, i, j), o2[i] = mean4(b, i, j);
+    for (uint32_t i = i0; i < w; ++i) {
+      Real s = y(2 * i, 2 * j) + y(2 * i + 1, 2 * j);
+      s += y(2 * i, 2 * j + 1);
+      s += y(2 * i + 1, 2 * j + 1);
+      o[i] = Real(0.25) * s;
+    }
   }
-  const Real T = Real(170.0 / (255.0 * 255.0)), third = Real(1) / Real(3);
-  // Prewitt/3 magnitude at (i, j) from the three rows around it (up, mid, down: rows j - 1,
-  // j, j + 1, with the zero padding already in whatever the caller passes at the borders).
+}
+
+// The Prewitt/3 gradient magnitude of d (w x h, zero padding) into g.
+template <class Real>
+void gmsd_magnitude(const Real* d, uint32_t w, uint32_t h, Real* g) {
+  const Real third = Real(1) / Real(3);
+  // At (i, j) from the three rows around it (up, mid, down: rows j - 1, j, j + 1).
   auto magnitude = [&](Real ul, Real um, Real ur, Real ml, Real mr, Real dl, Real dm, Real dr) {
     // Columns i-1 and i+1 of rows j-1..j+1 (x along a row), and the transpose.
     Real gx = (ur + mr) + dr;
@@ -73,39 +62,39 @@ Real gmsd(const Real* a, const Real* b, uint32_t width, uint32_t height) {
     m2 += gy * gy;
     return std::sqrt(m2);
   };
-  auto similarity = [&](Real g1, Real g2) {
-    Real num = Real(2) * g1 * g2;
-    num += T;
-    Real den = g1 * g1;
-    den += g2 * g2;
-    den += T;
-    return num / den;
-  };
-  auto checked = [&](const Real* d, int i, int j) {
+  auto checked = [&](int i, int j) {
     auto at = [&](int x, int yy) {
       return (x >= 0 && yy >= 0 && x < int(w) && yy < int(h)) ? d[size_t(yy) * w + size_t(x)] : Real(0);
     };
     return magnitude(at(i - 1, j - 1), at(i, j - 1), at(i + 1, j - 1), at(i - 1, j), at(i + 1, j), at(i - 1, j + 1),
                      at(i, j + 1), at(i + 1, j + 1));
   };
-  // Interior texels unchecked (vector lanes), the one-texel frame checked; then the sum in
-  // row-major order, one addition after another as before.
+  // Interior texels unchecked (vector lanes), the one-texel frame checked.
   for (uint32_t j = 0; j < h; ++j) {
-    Real* g = &gms[size_t(j) * w];
-    const bool inner_row = j > 0 && j + 1 < h;
-    if (inner_row && w > 2) {
-      const Real *p1 = &d1[size_t(j) * w], *u1 = p1 - w, *n1 = p1 + w;
-      const Real *p2 = &d2[size_t(j) * w], *u2 = p2 - w, *n2 = p2 + w;
-      for (uint32_t i = 1; i + 1 < w; ++i) {
-        const Real g1 = magnitude(u1[i - 1], u1[i], u1[i + 1], p1[i - 1], p1[i + 1], n1[i - 1], n1[i], n1[i + 1]);
-        const Real g2 = magnitude(u2[i - 1], u2[i], u2[i + 1], p2[i - 1], p2[i + 1], n2[i - 1], n2[i], n2[i + 1]);
-        g[i] = similarity(g1, g2);
-      }
-      g[0] = similarity(checked(d1, 0, int(j)), checked(d2, 0, int(j)));
-      g[w - 1] = similarity(checked(d1, int(w - 1), int(j)), checked(d2, int(w - 1), int(j)));
+    Real* o = &g[size_t(j) * w];
+    if (j > 0 && j + 1 < h && w > 2) {
+      const Real *p = &d[size_t(j) * w], *u = p - w, *n = p + w;
+      for (uint32_t i = 1; i + 1 < w; ++i) o[i] = magnitude(u[i - 1], u[i], u[i + 1], p[i - 1], p[i + 1], n[i - 1], n[i], n[i + 1]);
+      o[0] = checked(0, int(j)), o[w - 1] = checked(int(w - 1), int(j));
     } else {
-      for (uint32_t i = 0; i < w; ++i) g[i] = similarity(checked(d1, int(i), int(j)), checked(d2, int(i), int(j)));
+      for (uint32_t i = 0; i < w; ++i) o[i] = checked(int(i), int(j));
     }
+  }
+}
+
+// The gradient magnitude similarity of g1 and g2 (n each, T = 170/255^2) into gms, and its
+// population standard deviation divided by n - 1: the sums in order, one addition after
+// another.
+template <class Real>
+Real gmsd_deviation(const Real* g1, const Real* g2, size_t n, Real* gms) {
+  const Real T = Real(170.0 / (255.0 * 255.0));
+  for (size_t k = 0; k < n; ++k) {
+    Real num = Real(2) * g1[k] * g2[k];
+    num += T;
+    Real den = g1[k] * g1[k];
+    den += g2[k] * g2[k];
+    den += T;
+    gms[k] = num / den;
   }
   Real sum = 0;
   for (size_t k = 0; k < n; ++k) sum += gms[k];
@@ -116,6 +105,53 @@ Real gmsd(const Real* a, const Real* b, uint32_t width, uint32_t height) {
     var += d * d;
   }
   return std::sqrt(var / Real(n - 1));
+}
+
+// The thread's own scratch for the stages, kept from call to call: fresh buffers for eval's
+// 1696-px views were mapped and page-faulted anew on every call, a third of the time of
+// gmsd(); not zeroed when they grow (every element is written before it is read).
+template <class Real>
+Real* gmsd_scratch(size_t count) {
+  thread_local UninitializedVector<Real> scratch;
+  if (scratch.size() < count) scratch.resize(count);
+  return scratch.data();
+}
+
+template <class Real>
+Real gmsd(const Real* a, const Real* b, uint32_t width, uint32_t height) {
+  const uint32_t w = (width + 1) / 2, h = (height + 1) / 2;
+  const size_t n = size_t(w) * h;
+  if (n < 2) return Real(0);
+  Real* const d = gmsd_scratch<Real>(3 * n);
+  Real *const g1 = d + n, *const g2 = g1 + n;
+  gmsd_downsample(a, width, height, d);
+  gmsd_magnitude(d, w, h, g1);
+  gmsd_downsample(b, width, height, d);
+  gmsd_magnitude(d, w, h, g2);
+  return gmsd_deviation(g1, g2, n, d);
+}
+
+// The reference side of gmsd(a, ., width, height) on its own: a's gradient magnitudes
+// (Engine::gmsd_half_size(width, height) elements) into g1.
+template <class Real>
+void gmsd_reference(const Real* a, uint32_t width, uint32_t height, Real* g1) {
+  const uint32_t w = (width + 1) / 2, h = (height + 1) / 2;
+  Real* const d = gmsd_scratch<Real>(size_t(w) * h);
+  gmsd_downsample(a, width, height, d);
+  gmsd_magnitude(d, w, h, g1);
+}
+
+// gmsd(a, b, width, height) from a's gmsd_reference, bit for bit.
+template <class Real>
+Real gmsd_against(const Real* g1, const Real* b, uint32_t width, uint32_t height) {
+  const uint32_t w = (width + 1) / 2, h = (height + 1) / 2;
+  const size_t n = size_t(w) * h;
+  if (n < 2) return Real(0);
+  Real* const d = gmsd_scratch<Real>(2 * n);
+  Real* const g2 = d + n;
+  gmsd_downsample(b, width, height, d);
+  gmsd_magnitude(d, w, h, g2);
+  return gmsd_deviation(g1, g2, n, d);
 }
 
 }  // namespace uvpress::engine::cpu

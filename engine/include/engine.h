@@ -278,6 +278,20 @@ class Engine {
   // 64 x 64 are scored on the host).
   virtual std::vector<float> gmsd(const ImagePairs& pairs) = 0;
 
+  // GMSD against references scored many times (eval's reference views): gmsd_references
+  // works out each reference's gradient magnitudes once (steps 1 and 2, half its size a
+  // side: gmsd_half_size elements, one reference's after another into `magnitudes`), and
+  // gmsd_against scores images against them (pairs.first: those magnitudes, laid out so;
+  // pairs.second: the images), equal bit for bit to gmsd() of the images with the
+  // references, which are then neither read again nor kept (a quarter of their memory).
+  // On the host for both backends (engine/cpu/gmsd_against.cpp), as gmsd() is for eval's
+  // sizes.
+  void gmsd_references(const ImagePairs& references, float* magnitudes);
+  std::vector<float> gmsd_against(const ImagePairs& pairs);
+  static size_t gmsd_half_size(uint32_t width, uint32_t height) {
+    return size_t((width + 1) / 2) * ((height + 1) / 2);
+  }
+
   // Rasterizes every view (coverage, reference render). Throws EngineError for a view that
   // breaks the limits in shader/layout.h.
   virtual std::unique_ptr<ViewSet> prepare_views(const ViewSetDesc& desc) = 0;

@@ -558,20 +558,36 @@ void for_each_view(size_t count, Fn&& fn) {
   for (long v = 0; v < long(count); ++v) fn(size_t(v));
 }
 
-// GMSD of the view pairs `frames` (reference and image pixels of those views, one after
-// the other): one call, with each pair's size where the views differ (cropped).
+// The views `frames` as ImagePairs: their sizes, each pair's where the views differ (cropped).
+struct ViewPairs {
+  std::vector<uint32_t> sizes;
+  engine::ImagePairs pairs;
+  ViewPairs(const float* first, const float* second, const ViewFrame* frames, size_t count) {
+    bool one_size = true;
+    for (size_t v = 0; v < count; ++v) {
+      sizes.insert(sizes.end(), {frames[v].width, frames[v].height});
+      one_size = one_size && frames[v].width == frames[0].width && frames[v].height == frames[0].height;
+    }
+    pairs = {frames[0].width, frames[0].height, uint32_t(count), first, second};
+    if (!one_size) pairs.sizes = sizes.data();
+  }
+};
+
+// The gradient magnitudes (Engine::gmsd_references) of the reference views `frames`
+// (pixels `ref`, one view after the other) into `out`, one view's after another.
+void reference_magnitudes(engine::Engine& engine, const float* ref, const ViewFrame* frames, size_t count, float* out,
+                          Timing& timing) {
+  const Stopwatch t0;
+  engine.gmsd_references(ViewPairs(ref, nullptr, frames, count).pairs, out);
+  timing.gmsd += t0.seconds();
+}
+
+// GMSD of the views `frames` (pixels `img`, one view after the other) against the
+// reference views' magnitudes `ref` (reference_magnitudes): one call.
 void gmsd_views(engine::Engine& engine, const float* ref, const float* img, const ViewFrame* frames, size_t count,
                 float* out, Timing& timing) {
   const Stopwatch t0;
-  bool one_size = true;
-  std::vector<uint32_t> sizes;
-  for (size_t v = 0; v < count; ++v) {
-    sizes.insert(sizes.end(), {frames[v].width, frames[v].height});
-    one_size = one_size && frames[v].width == frames[0].width && frames[v].height == frames[0].height;
-  }
-  engine::ImagePairs pairs{frames[0].width, frames[0].height, uint32_t(count), ref, img};
-  if (!one_size) pairs.sizes = sizes.data();
-  const auto g = engine.gmsd(pairs);
+  const auto g = engine.gmsd_against(ViewPairs(ref, img, frames, count).pairs);
   std::copy(g.begin(), g.end(), out);
   timing.gmsd += t0.seconds();
 }
@@ -584,10 +600,13 @@ std::pair<uint32_t, uint32_t> size_at(double c_r, double ref_texels, double aspe
   return {W, H};
 }
 
-// The reference's views: luminance, unlit, and when the evaluation is lit the lit views
-// too (views x res x res each).
+// The reference's views as GMSD reads them (reference_magnitudes): unlit, and when the
+// evaluation is lit the lit views too, each view's at[v] into them. A quarter of the
+// views' pixels: Fox's 20 views at 1696 px took 230 MB as pixels, and their first touch
+// was most of the time reparam's scorer took to set up.
 struct ReferenceViews {
-  engine::UninitializedVector<float> unlit, lit;  // every pixel written (reference_views)
+  engine::UninitializedVector<float> unlit, lit;  // every element written (reference_views)
+  std::vector<size_t> at;                          // per view, and the total last
 };
 
 // What every evaluation of one reference shares: its layout, the cameras, the view
@@ -701,7 +720,7 @@ Scores score_views(engine::Engine& engine, const Setup& s, const LayoutMesh& m, 
   const ReferenceViews& ref = ref_views ? *ref_views : s.ref_views;
   std::vector<float> g(views.size()), g_lit(s.lit ? views.size() : 0);
   render_scored_views(engine, s, m, tex, views, timing, [&](size_t first, size_t count, const float* px, const float* lit) {
-    const size_t at = views[first].offset;
+    const size_t at = ref.at[first];
     gmsd_views(engine, ref.unlit.data() + at, px, &views[first], count, g.data() + first, timing);
     if (lit) gmsd_views(engine, ref.lit.data() + at, lit, &views[first], count, g_lit.data() + first, timing);
   });
@@ -738,7 +757,7 @@ std::vector<Scores> score_views_many(engine::Engine& engine, const Setup& s, con
     const size_t per_chunk = std::max<size_t>(2, 2 * kChunkPixels / (largest * driving.size()));
     render_views(engine, m, driving, views, timing, s.scratch,
                  [&](size_t first, size_t count, size_t k, const float* px, const uint32_t*) {
-                   gmsd_views(engine, s.ref_views.unlit.data() + views[first].offset, px, &views[first], count,
+                   gmsd_views(engine, s.ref_views.unlit.data() + s.ref_views.at[first], px, &views[first], count,
                               g[k].data() + first, timing);
                  },
                  per_chunk);
@@ -802,12 +821,13 @@ uint64_t codec_bytes(const Setup& s, uint32_t width, uint32_t height) {
 ReferenceViews reference_views(engine::Engine& engine, const Setup& s, const LayoutMesh& m, const LayoutTextures& tex,
                                const std::vector<ViewFrame>& frames, Timing& timing) {
   ReferenceViews out;
-  out.unlit.resize(total_pixels(frames));
+  out.at.assign(1, 0);
+  for (const ViewFrame& f : frames) out.at.push_back(out.at.back() + engine::Engine::gmsd_half_size(f.width, f.height));
+  out.unlit.resize(out.at.back());
   if (s.lit) out.lit.resize(out.unlit.size());
   render_scored_views(engine, s, m, tex, frames, timing, [&](size_t first, size_t views, const float* px, const float* lit) {
-    const size_t at = frames[first].offset, n = frames[first + views - 1].offset + frames[first + views - 1].pixels() - at;
-    std::copy(px, px + n, out.unlit.data() + at);
-    if (lit) std::copy(lit, lit + n, out.lit.data() + at);
+    reference_magnitudes(engine, px, &frames[first], views, out.unlit.data() + out.at[first], timing);
+    if (lit) reference_magnitudes(engine, lit, &frames[first], views, out.lit.data() + out.at[first], timing);
   });
   return out;
 }
@@ -826,9 +846,11 @@ Scores score_against_own_reference(engine::Engine& engine, const Setup& s, const
   std::vector<float> g(frames.size()), ref_chunk;
   render_views(engine, m, {&reference.driving, &tex.driving}, frames, timing, s.scratch,
                [&](size_t first, size_t count, size_t k, const float* px, const uint32_t*) {
-                 const size_t n = frames[first + count - 1].offset + frames[first + count - 1].pixels() - frames[first].offset;
-                 if (k == 0) {
-                   ref_chunk.assign(px, px + n);  // texture 0 of a chunk comes before texture 1
+                 if (k == 0) {  // texture 0 of a chunk comes before texture 1
+                   size_t n = 0;
+                   for (size_t v = first; v < first + count; ++v) n += engine::Engine::gmsd_half_size(frames[v].width, frames[v].height);
+                   ref_chunk.resize(n);
+                   reference_magnitudes(engine, px, &frames[first], count, ref_chunk.data(), timing);
                    return;
                  }
                  gmsd_views(engine, ref_chunk.data(), px, &frames[first], count, g.data() + first, timing);

@@ -130,3 +130,56 @@ TEST_CASE("GMSD of pairs of their own sizes: each pair as if scored alone, on ev
   for (size_t k = 0; k < together.size(); ++k) CHECK(on_vulkan[k] == together[k]);
   CHECK(vk->validation_errors() == 0);
 }
+
+TEST_CASE("GMSD against prepared references: gmsd()'s bits for every size, on every backend", "[engine][gmsd][vulkan]") {
+  // eval keeps its reference views as their gradient magnitudes (Engine::gmsd_references)
+  // and scores every render against them (Engine::gmsd_against): the same value, bit for
+  // bit, as gmsd() of the pair, at odd sizes, at sizes too small to score (n < 2: 0), for
+  // pairs of their own sizes and of one size, and for the golden vectors.
+  auto cpu_engine = make_cpu_engine({});
+  const std::vector<uint32_t> sizes = {150, 97, 33, 70, 1, 1, 2, 3, 64, 64, 201, 18, 5, 1};
+  size_t total = 0, half = 0;
+  for (size_t k = 0; k < sizes.size(); k += 2)
+    total += size_t(sizes[k]) * sizes[k + 1], half += Engine::gmsd_half_size(sizes[k], sizes[k + 1]);
+  std::vector<float> a(total), b(total);
+  std::mt19937 rng(13);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  for (size_t i = 0; i < a.size(); ++i) a[i] = u(rng), b[i] = std::clamp(a[i] + 0.3f * (u(rng) - 0.5f), 0.0f, 1.0f);
+  ImagePairs pairs{0, 0, uint32_t(sizes.size() / 2), a.data(), b.data()};
+  pairs.sizes = sizes.data();
+  const auto direct = cpu_engine->gmsd(pairs);
+  std::vector<float> magnitudes(half, -1.0f);
+  cpu_engine->gmsd_references(pairs, magnitudes.data());
+  CHECK(std::count(magnitudes.begin(), magnitudes.end(), -1.0f) == 0);  // every element written
+  ImagePairs against = pairs;
+  against.first = magnitudes.data();
+  const auto prepared = cpu_engine->gmsd_against(against);
+  REQUIRE(prepared.size() == direct.size());
+  for (size_t k = 0; k < direct.size(); ++k) {
+    INFO("pair " << k << ": " << sizes[2 * k] << " x " << sizes[2 * k + 1] << ", gmsd " << direct[k]);
+    CHECK(prepared[k] == direct[k]);
+    // 1 x 1 has one half-size element: 0; the others score their noise.
+    CHECK((sizes[2 * k] * sizes[2 * k + 1] == 1 ? direct[k] == 0.0f : direct[k] > 0.0f));
+  }
+  // One size for the whole call.
+  const ImagePairs same{150, 97, 1, a.data(), b.data()};
+  std::vector<float> m1(Engine::gmsd_half_size(150, 97));
+  cpu_engine->gmsd_references(same, m1.data());
+  CHECK(cpu_engine->gmsd_against(ImagePairs{150, 97, 1, m1.data(), b.data()})[0] == direct[0]);
+  // The golden vectors, float within 1e-6 relative as gmsd() is.
+  for (const auto& c : goldens()) {
+    INFO("case " << c.name);
+    auto ga = image<float>(c, c.y1), gb = image<float>(c, c.y2);
+    std::vector<float> gm(Engine::gmsd_half_size(c.cols, c.rows));
+    cpu_engine->gmsd_references(ImagePairs{c.cols, c.rows, 1, ga.data(), nullptr}, gm.data());
+    const float v = cpu_engine->gmsd_against(ImagePairs{c.cols, c.rows, 1, gm.data(), gb.data()})[0];
+    CHECK(std::abs(v - c.gmsd) <= 1e-6 * c.gmsd + 1e-7);
+  }
+  UVPRESS_LAVAPIPE_OR_SKIP(vk);
+  std::vector<float> on_vulkan(half);
+  vk->gmsd_references(pairs, on_vulkan.data());
+  CHECK(on_vulkan == magnitudes);
+  const auto vk_prepared = vk->gmsd_against(against);
+  for (size_t k = 0; k < direct.size(); ++k) CHECK(vk_prepared[k] == direct[k]);
+  CHECK(vk->validation_errors() == 0);
+}
