@@ -238,8 +238,8 @@ __attribute__((always_inline)) inline void sample_tile(const TextureInSpace& x, 
 }
 
 // Shades tile (tx, ty) of one view for every texture: one visibility pass and one
-// footprint per pixel, then every texture sampled; writes coverage and pixels of the
-// camera's image (width x height, at `coverage` and `pixels`, rows row_stride pixels apart:
+// footprint per pixel, then every texture sampled; writes coverage (unless null) and pixels
+// of the camera's image (width x height, at `coverage` and `pixels`, rows row_stride apart:
 // a tile of a whole view, mesh::image_place), texture k's pixels texture_stride floats
 // after texture k - 1's. render_mesh.comp mirrors it, one texture, operation for operation.
 __attribute__((target_clones("avx2", "default")))
@@ -264,12 +264,12 @@ void shade_tile(const MeshRenderDesc& d, const std::vector<TextureInSpace>& text
       const uint32_t best = best_of[(j - j0) * T + (i - i0)];
       const size_t p = size_t(j) * row_stride + i;
       if (best == kNoMeshTriangle) {
-        coverage[p] = kNoMeshTriangle;
+        if (coverage) coverage[p] = kNoMeshTriangle;
         empty_row[j - j0] = true;
         continue;
       }
       const MeshTriangle& r = setup.triangles[best];
-      coverage[p] = r.index;
+      if (coverage) coverage[p] = r.index;
       at[m] = p, fp[m] = footprint(r, float(i) + 0.5f, float(j) + 0.5f, mips), ++m;
     }
   // Empty pixels are 0: each tile row that has one is cleared whole, texture by texture,
@@ -314,7 +314,7 @@ void size_mesh_renders(const MeshRenderDesc& d, MeshRenders& out, uint32_t textu
   out.width = d.width, out.height = d.height, out.count = uint32_t(d.cameras.size()), out.channels = d.channels;
   out.textures = textures;
   const size_t n = size_t(d.width) * d.height;
-  out.coverage.resize(n * out.count);
+  out.coverage.resize(d.coverage ? n * out.count : 0);
   out.pixels.resize(n * out.count * d.channels * textures);
 }
 
@@ -354,7 +354,8 @@ void render_on_cpu(const Engine& engine, const MeshRenderDesc& d, const std::vec
     const uint32_t v = item / ty, row = item % ty;
     const mesh::ImagePlace at = mesh::image_place(d, v);
     for (uint32_t a = 0; a < tx; ++a)
-      mesh::shade_tile(space, in_space, setups[v], a, row, stride, at.row_stride, out.coverage.data() + at.origin,
+      mesh::shade_tile(space, in_space, setups[v], a, row, stride, at.row_stride,
+                       d.coverage ? out.coverage.data() + at.origin : nullptr,
                        out.pixels.data() + at.origin * d.channels);
   }, 1);
 }

@@ -142,6 +142,10 @@ struct MeshRenderDesc {
   // kMeshRenderMaxSide (eval's) without a copy of every pixel to stitch them. 1 x 1 (the
   // default): every camera is an image of its own. The cameras must be whole runs.
   uint32_t view_tiles_x = 1, view_tiles_y = 1;
+  // false: MeshRenders::coverage is left empty, for callers that read only the pixels (eval's
+  // unlit scores). At eval's sizes its 4 bytes a pixel were as many stores as a
+  // one-texture render's pixels (reparam's scoring of each candidate).
+  bool coverage = true;
 };
 
 // Texels in the first `levels` levels of a width x height mip chain (sizes as above).
@@ -181,7 +185,8 @@ struct UninitializedAllocator : std::allocator<T> {
 template <class T>
 using UninitializedVector = std::vector<T, UninitializedAllocator<T>>;
 
-// Renders, view after view: coverage (triangle index, kNoMeshTriangle where empty) and
+// Renders, view after view: coverage (triangle index, kNoMeshTriangle where empty; none
+// without MeshRenderDesc::coverage) and
 // `channels` floats a pixel; with several textures (render_mesh_textures) the pixels hold
 // every view of the first texture, then every view of the next, coverage once. Every
 // element is written by the render. width, height and count are the cameras' (tiles', with

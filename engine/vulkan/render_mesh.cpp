@@ -68,15 +68,16 @@ void MeshRenderer::render(const MeshRenderDesc& d, MeshRenders& out) {
     sequence_.dispatch(kernel_, {&triangles, &offsets, &bin_items, &texture, &coverage, &pixels}, &push, tx, ty, count);
     sequence_.submit_and_wait();
     if (d.view_tiles_x * d.view_tiles_y == 1) {
-      std::memcpy(out.coverage.data() + first * n, coverage.data<uint32_t>(), 4 * n * count);
+      if (d.coverage) std::memcpy(out.coverage.data() + first * n, coverage.data<uint32_t>(), 4 * n * count);
       std::memcpy(out.pixels.data() + first * n * d.channels, pixels.data<float>(), 4 * n * d.channels * count);
     } else {  // each tile's rows into their place in its view (MeshRenderDesc::view_tiles_x)
       const size_t C = d.channels;
       parallel_for(count, std::max(1u, std::thread::hardware_concurrency()), [&](uint32_t v) {
         const mesh::ImagePlace at = mesh::image_place(d, first + v);
         for (uint32_t j = 0; j < d.height; ++j) {
-          std::memcpy(out.coverage.data() + at.origin + j * at.row_stride, coverage.data<uint32_t>() + v * n + j * d.width,
-                      4 * size_t(d.width));
+          if (d.coverage)
+            std::memcpy(out.coverage.data() + at.origin + j * at.row_stride, coverage.data<uint32_t>() + v * n + j * d.width,
+                        4 * size_t(d.width));
           std::memcpy(out.pixels.data() + (at.origin + j * at.row_stride) * C,
                       pixels.data<float>() + (v * n + j * size_t(d.width)) * C, 4 * size_t(d.width) * C);
         }

@@ -423,10 +423,11 @@ struct RenderScratch {
 // the next render into it). Chunks hold views of one tile size, at most `per_chunk` of
 // them (0: about kChunkPixels for all the textures together). One texture is
 // Engine::render_mesh; several, Engine::render_mesh_textures (each view rasterized once).
+// Without `coverage` the renders have none (MeshRenderDesc::coverage) and fn is given null.
 template <class Fn>
 void render_views(engine::Engine& engine, const LayoutMesh& m, const std::vector<const Texture*>& textures,
                   const std::vector<ViewFrame>& frames, Timing& timing, RenderScratch& scratch, Fn&& fn,
-                  size_t per_chunk = 0) {
+                  size_t per_chunk = 0, bool coverage = false) {
   const uint32_t C = textures.front()->channels;
   const size_t K = textures.size();
   engine::MeshRenderDesc d;
@@ -437,6 +438,7 @@ void render_views(engine::Engine& engine, const LayoutMesh& m, const std::vector
   d.texture = t0.texels.data(), d.texture_width = t0.width, d.texture_height = t0.height;
   d.channels = C, d.mip_levels = t0.levels;
   d.repeat = m.repeat;
+  d.coverage = coverage;
   std::vector<engine::MeshTexture> mesh_textures;
   for (const Texture* t : textures) mesh_textures.push_back({t->texels.data(), t->width, t->height, t->levels});
   engine::MeshRenders& r = scratch.renders;
@@ -461,7 +463,7 @@ void render_views(engine::Engine& engine, const LayoutMesh& m, const std::vector
     first += views;
   }
   scratch.hold(r.pixels, most * C * K);
-  scratch.hold(r.coverage, most);
+  if (coverage) scratch.hold(r.coverage, most);
   for (const auto& [first, views] : chunks) {
     const ViewFrame& f0 = frames[first];
     d.width = f0.tile_width(), d.height = f0.tile_height();
@@ -489,7 +491,8 @@ void render_views(engine::Engine& engine, const LayoutMesh& m, const std::vector
     timing.render += t_render.seconds();
     const size_t T = size_t(d.width) * d.height, rendered = T * d.cameras.size();  // pixels a texture
     if (!tiled || in_place) {
-      for (size_t k = 0; k < K; ++k) fn(first, views, k, r.pixels.data() + k * rendered * C, r.coverage.data());
+      for (size_t k = 0; k < K; ++k)
+        fn(first, views, k, r.pixels.data() + k * rendered * C, coverage ? r.coverage.data() : nullptr);
       continue;
     }
     const size_t base = f0.offset;
@@ -501,10 +504,10 @@ void render_views(engine::Engine& engine, const LayoutMesh& m, const std::vector
       covered = covered && frames[v].tiles_x * frames[v].tile_width() == frames[v].width &&
                 frames[v].tiles_y * frames[v].tile_height() == frames[v].height;
     if (covered) {
-      stitched.resize(chunk * C), stitched_coverage.resize(chunk);
+      stitched.resize(chunk * C), stitched_coverage.resize(coverage ? chunk : 0);
     } else {
       stitched.assign(chunk * C, 0.0f);
-      stitched_coverage.assign(chunk, engine::kNoMeshTriangle);
+      stitched_coverage.assign(coverage ? chunk : 0, engine::kNoMeshTriangle);
     }
     // Each tile's rows copied into place, tiles spread over the threads (disjoint rows of
     // the stitched views): a copy of every pixel that Fox's 2 x 2-tiled views made the
@@ -524,16 +527,16 @@ void render_views(engine::Engine& engine, const LayoutMesh& m, const std::vector
         const ViewFrame& f = frames[placed[tile_index].view];
         const uint32_t a = placed[tile_index].a, b = placed[tile_index].b;
         const float* tile = r.pixels.data() + (k * rendered + tile_index * T) * C;
-        const uint32_t* tile_coverage = r.coverage.data() + tile_index * T;
+        const uint32_t* tile_coverage = coverage ? r.coverage.data() + tile_index * T : nullptr;
         for (uint32_t j = 0; j < d.height; ++j) {
           const size_t row = f.offset - base + (size_t(b) * d.height + j) * f.width + size_t(a) * d.width;
           std::copy(tile + size_t(j) * d.width * C, tile + size_t(j + 1) * d.width * C, stitched.data() + row * C);
-          if (k == 0)
+          if (k == 0 && coverage)
             std::copy(tile_coverage + size_t(j) * d.width, tile_coverage + size_t(j + 1) * d.width,
                       stitched_coverage.data() + row);
         }
       }
-      fn(first, views, k, stitched.data(), stitched_coverage.data());
+      fn(first, views, k, stitched.data(), coverage ? stitched_coverage.data() : nullptr);
     }
   }
 }
@@ -541,12 +544,12 @@ void render_views(engine::Engine& engine, const LayoutMesh& m, const std::vector
 // The same with one texture: fn(first view, views, pixels, coverage).
 template <class Fn>
 void render_views(engine::Engine& engine, const LayoutMesh& m, const Texture& tex, const std::vector<ViewFrame>& frames,
-                  Timing& timing, RenderScratch& scratch, Fn&& fn, size_t per_chunk = 0) {
+                  Timing& timing, RenderScratch& scratch, Fn&& fn, size_t per_chunk = 0, bool coverage = false) {
   render_views(engine, m, std::vector<const Texture*>{&tex}, frames, timing, scratch,
-               [&](size_t first, size_t views, size_t, const float* px, const uint32_t* coverage) {
-                 fn(first, views, px, coverage);
+               [&](size_t first, size_t views, size_t, const float* px, const uint32_t* covered) {
+                 fn(first, views, px, covered);
                },
-               per_chunk);
+               per_chunk, coverage);
 }
 
 // fn(v) for every view v < count, views spread over the threads (each view writes only its
@@ -701,7 +704,7 @@ void render_scored_views(engine::Engine& engine, const Setup& s, const LayoutMes
         timing.shading += t0.seconds();
         fn(first, views, px, lit.data());
       },
-      per_chunk);
+      per_chunk, true);
 }
 
 double mean_of(const std::vector<float>& x) {

@@ -315,6 +315,49 @@ TEST_CASE("render_mesh: view_tiles lays each view's tiles out whole, the same pi
   }
 }
 
+TEST_CASE("render_mesh without coverage: the same pixels, no coverage, tiled or not, one texture or several",
+          "[eval][engine]") {
+  // eval's unlit scores read only the pixels (MeshRenderDesc::coverage = false).
+  const DemoViews demo(2);
+  engine::MeshRenderDesc d = demo.desc();
+  const uint32_t k = 2, T = 256;
+  d.width = d.height = T;
+  d.cameras = tile_cameras({demo.cameras[0], demo.cameras[7]}, k);
+  d.view_tiles_x = d.view_tiles_y = k;
+  auto check = [&](engine::Engine& e, const char* name) {
+    INFO(name);
+    engine::MeshRenderDesc bare = d;
+    bare.coverage = false;
+    const auto with = e.render_mesh(d), without = e.render_mesh(bare);
+    CHECK(with.coverage.size() == with.pixels.size() / d.channels);
+    CHECK(without.coverage.empty());
+    CHECK(without.pixels == with.pixels);
+    size_t covered = 0;
+    for (uint32_t c : with.coverage) covered += c != engine::kNoMeshTriangle;
+    CHECK(covered > with.coverage.size() / 4);
+    const std::vector<engine::MeshTexture> two = {{d.texture, d.texture_width, d.texture_height, d.mip_levels},
+                                                  {d.texture, d.texture_width, d.texture_height, d.mip_levels}};
+    engine::MeshRenders many_with, many_without;
+    e.render_mesh_textures(d, two, many_with);
+    e.render_mesh_textures(bare, two, many_without);
+    CHECK(many_without.coverage.empty());
+    CHECK(many_without.pixels == many_with.pixels);
+    CHECK(many_with.coverage == with.coverage);
+  };
+  auto cpu = engine::make_cpu_engine({});
+  check(*cpu, "cpu");
+  std::unique_ptr<engine::Engine> vk;
+  try {
+    vk = test::lavapipe();
+  } catch (const engine::EngineError& e) {
+    WARN(std::string("no lavapipe, the Vulkan half skipped: ") + e.what());
+  }
+  if (vk) {
+    check(*vk, "lavapipe");
+    CHECK(vk->validation_errors() == 0);
+  }
+}
+
 TEST_CASE("eval: auto resolution resolves single-texel detail that 512-px views minify", "[eval]") {
   // A 512^2 texture of single-texel noise on the demo sheet: the 512-px views minify it
   // (1.6 texels a pixel at the median, 3 at the 95th percentile).
