@@ -74,7 +74,8 @@ void gmsd_magnitude(const Real* d, uint32_t w, uint32_t h, Real* g) {
     Real* o = &g[size_t(j) * w];
     if (j > 0 && j + 1 < h && w > 2) {
       const Real *p = &d[size_t(j) * w], *u = p - w, *n = p + w;
-      for (uint32_t i = 1; i + 1 < w; ++i) o[i] = magnitude(u[i - 1], u[i], u[i + 1], p[i - 1], p[i + 1], n[i - 1], n[i], n[i + 1]);
+      for (uint32_t i = 1; i + 1 < w; ++i)
+        o[i] = magnitude(u[i - 1], u[i], u[i + 1], p[i - 1], p[i + 1], n[i - 1], n[i], n[i + 1]);
       o[0] = checked(0, int(j)), o[w - 1] = checked(int(w - 1), int(j));
     } else {
       for (uint32_t i = 0; i < w; ++i) o[i] = checked(int(i), int(j));

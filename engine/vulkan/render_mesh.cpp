@@ -76,8 +76,8 @@ void MeshRenderer::render(const MeshRenderDesc& d, MeshRenders& out) {
         const mesh::ImagePlace at = mesh::image_place(d, first + v);
         for (uint32_t j = 0; j < d.height; ++j) {
           if (d.coverage)
-            std::memcpy(out.coverage.data() + at.origin + j * at.row_stride, coverage.data<uint32_t>() + v * n + j * d.width,
-                        4 * size_t(d.width));
+            std::memcpy(out.coverage.data() + at.origin + j * at.row_stride,
+                        coverage.data<uint32_t>() + v * n + j * d.width, 4 * size_t(d.width));
           std::memcpy(out.pixels.data() + (at.origin + j * at.row_stride) * C,
                       pixels.data<float>() + (v * n + j * size_t(d.width)) * C, 4 * size_t(d.width) * C);
         }

@@ -564,7 +564,9 @@ void for_each_view(size_t count, Fn&& fn) {
 // The views `frames` as ImagePairs: their sizes, each pair's where the views differ (cropped).
 struct ViewPairs {
   std::vector<uint32_t> sizes;
-  engine::ImagePairs pairs;
+  engine::ImagePairs pairs;  // points into sizes: not to be copied
+  ViewPairs(const ViewPairs&) = delete;
+  ViewPairs& operator=(const ViewPairs&) = delete;
   ViewPairs(const float* first, const float* second, const ViewFrame* frames, size_t count) {
     bool one_size = true;
     for (size_t v = 0; v < count; ++v) {
@@ -627,10 +629,9 @@ struct Setup {
   ReferenceViews ref_views;
   // render_views' storage, kept across costs and candidates: every render's, and the maps'
   // renders nested inside the views' when lit. One buffer for all the renders that do not
-  // nest: on these VMs a page's first touch costs about 40 times a later write of it (1 GiB
-  // took 1.5-1.9 s to touch with huge pages, 0.05 s to set again), and Fox's eval --flatten
-  // held three of them (views, many textures, a pair) of up to 180 MB each. Setup serves
-  // one thread at a time.
+  // nest, since fresh pages are the costly ones (RenderScratch::hold): Fox's eval --flatten
+  // held three (views, many textures, a pair) of up to 180 MB each. Setup serves one thread
+  // at a time.
   mutable RenderScratch scratch, map_scratch;
   double image_texels = 0, chart_texels = 0;
   double radius = 0;  // the largest extent of the bounding box
@@ -851,7 +852,8 @@ Scores score_against_own_reference(engine::Engine& engine, const Setup& s, const
                [&](size_t first, size_t count, size_t k, const float* px, const uint32_t*) {
                  if (k == 0) {  // texture 0 of a chunk comes before texture 1
                    size_t n = 0;
-                   for (size_t v = first; v < first + count; ++v) n += engine::Engine::gmsd_half_size(frames[v].width, frames[v].height);
+                   for (size_t v = first; v < first + count; ++v)
+                     n += engine::Engine::gmsd_half_size(frames[v].width, frames[v].height);
                    ref_chunk.resize(n);
                    reference_magnitudes(engine, px, &frames[first], count, ref_chunk.data(), timing);
                    return;
