@@ -108,28 +108,15 @@ Real gmsd_deviation(const Real* g1, const Real* g2, size_t n, Real* gms) {
   return std::sqrt(var / Real(n - 1));
 }
 
-// The thread's own scratch for the stages, kept from call to call: fresh buffers for eval's
-// 1696-px views were mapped and page-faulted anew on every call, a third of the time of
-// gmsd(); not zeroed when they grow (every element is written before it is read).
-template <class Real>
+// The thread's own scratch for the stages (Slot: buffers in use at once), kept from call to
+// call: fresh buffers for eval's 1696-px views were mapped and page-faulted anew on every
+// call, a third of the time of gmsd(); not zeroed when they grow (every element is written
+// before it is read).
+template <class Real, int Slot>
 Real* gmsd_scratch(size_t count) {
   thread_local UninitializedVector<Real> scratch;
   if (scratch.size() < count) scratch.resize(count);
   return scratch.data();
-}
-
-template <class Real>
-Real gmsd(const Real* a, const Real* b, uint32_t width, uint32_t height) {
-  const uint32_t w = (width + 1) / 2, h = (height + 1) / 2;
-  const size_t n = size_t(w) * h;
-  if (n < 2) return Real(0);
-  Real* const d = gmsd_scratch<Real>(3 * n);
-  Real *const g1 = d + n, *const g2 = g1 + n;
-  gmsd_downsample(a, width, height, d);
-  gmsd_magnitude(d, w, h, g1);
-  gmsd_downsample(b, width, height, d);
-  gmsd_magnitude(d, w, h, g2);
-  return gmsd_deviation(g1, g2, n, d);
 }
 
 // The reference side of gmsd(a, ., width, height) on its own: a's gradient magnitudes
@@ -137,7 +124,7 @@ Real gmsd(const Real* a, const Real* b, uint32_t width, uint32_t height) {
 template <class Real>
 void gmsd_reference(const Real* a, uint32_t width, uint32_t height, Real* g1) {
   const uint32_t w = (width + 1) / 2, h = (height + 1) / 2;
-  Real* const d = gmsd_scratch<Real>(size_t(w) * h);
+  Real* const d = gmsd_scratch<Real, 0>(size_t(w) * h);
   gmsd_downsample(a, width, height, d);
   gmsd_magnitude(d, w, h, g1);
 }
@@ -148,11 +135,18 @@ Real gmsd_against(const Real* g1, const Real* b, uint32_t width, uint32_t height
   const uint32_t w = (width + 1) / 2, h = (height + 1) / 2;
   const size_t n = size_t(w) * h;
   if (n < 2) return Real(0);
-  Real* const d = gmsd_scratch<Real>(2 * n);
+  Real* const d = gmsd_scratch<Real, 0>(2 * n);
   Real* const g2 = d + n;
   gmsd_downsample(b, width, height, d);
   gmsd_magnitude(d, w, h, g2);
   return gmsd_deviation(g1, g2, n, d);
+}
+
+template <class Real>
+Real gmsd(const Real* a, const Real* b, uint32_t width, uint32_t height) {
+  Real* const g1 = gmsd_scratch<Real, 1>(size_t((width + 1) / 2) * ((height + 1) / 2));
+  gmsd_reference(a, width, height, g1);
+  return gmsd_against(g1, b, width, height);
 }
 
 }  // namespace uvpress::engine::cpu

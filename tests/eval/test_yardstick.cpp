@@ -236,6 +236,24 @@ void for_each_tile_pixel(size_t views, uint32_t k, uint32_t T, Fn&& fn) {
                v * k * k * T * T + (size_t(b) * T + j) * k * T + size_t(a) * T + i);
 }
 
+// check(engine, name) on the CPU backend, then on lavapipe where it starts (else the Vulkan
+// half is skipped with a warning), with no validation error.
+template <class Check>
+void on_cpu_and_lavapipe(Check&& check) {
+  auto cpu = engine::make_cpu_engine({});
+  check(*cpu, "cpu");
+  std::unique_ptr<engine::Engine> vk;
+  try {
+    vk = test::lavapipe();
+  } catch (const engine::EngineError& e) {
+    WARN(std::string("no lavapipe, the Vulkan half skipped: ") + e.what());
+  }
+  if (vk) {
+    check(*vk, "lavapipe");
+    CHECK(vk->validation_errors() == 0);
+  }
+}
+
 }  // namespace
 
 TEST_CASE("render_mesh: a view rendered as 2 x 2 tiles is the whole view, triangles past the guard band are clipped",
@@ -301,18 +319,7 @@ TEST_CASE("render_mesh: view_tiles lays each view's tiles out whole, the same pi
     w.cameras.pop_back();
     CHECK_THROWS_AS(e.render_mesh(w), engine::EngineError);
   };
-  auto cpu = engine::make_cpu_engine({});
-  check(*cpu, "cpu");
-  std::unique_ptr<engine::Engine> vk;
-  try {
-    vk = test::lavapipe();
-  } catch (const engine::EngineError& e) {
-    WARN(std::string("no lavapipe, the Vulkan half skipped: ") + e.what());
-  }
-  if (vk) {
-    check(*vk, "lavapipe");
-    CHECK(vk->validation_errors() == 0);
-  }
+  on_cpu_and_lavapipe(check);
 }
 
 TEST_CASE("render_mesh without coverage: the same pixels, no coverage, tiled or not, one texture or several",
@@ -344,18 +351,7 @@ TEST_CASE("render_mesh without coverage: the same pixels, no coverage, tiled or 
     CHECK(many_without.pixels == many_with.pixels);
     CHECK(many_with.coverage == with.coverage);
   };
-  auto cpu = engine::make_cpu_engine({});
-  check(*cpu, "cpu");
-  std::unique_ptr<engine::Engine> vk;
-  try {
-    vk = test::lavapipe();
-  } catch (const engine::EngineError& e) {
-    WARN(std::string("no lavapipe, the Vulkan half skipped: ") + e.what());
-  }
-  if (vk) {
-    check(*vk, "lavapipe");
-    CHECK(vk->validation_errors() == 0);
-  }
+  on_cpu_and_lavapipe(check);
 }
 
 TEST_CASE("eval: auto resolution resolves single-texel detail that 512-px views minify", "[eval]") {
