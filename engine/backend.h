@@ -17,6 +17,10 @@ void check_mesh_render(const MeshRenderDesc& desc);
 // zeroed; the renderers write every pixel).
 void size_mesh_renders(const MeshRenderDesc& desc, MeshRenders& out, uint32_t textures = 1);
 
+// Threads for the host code both backends run (render_mesh on the CPU, GMSD against
+// references): the CPU engine's own count, else the machine's.
+unsigned host_threads(const Engine& engine);
+
 // Throws EngineError for a RebakeTexelsDesc that breaks its rules.
 void check_rebake_texels(const RebakeTexelsDesc& desc);
 

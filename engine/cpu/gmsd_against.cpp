@@ -4,8 +4,6 @@
 #include "gmsd.h"
 #include "parallel_for.h"
 
-#include <thread>
-
 namespace uvpress::engine {
 
 namespace {
@@ -21,32 +19,32 @@ __attribute__((target_clones("avx2", "default"), flatten)) float against_one(con
   return cpu::gmsd_against<float>(g1, b, w, h);
 }
 
-unsigned host_threads(const Engine& engine) {
-  const DeviceInfo device = engine.device();
-  return std::max(1u, device.backend == "cpu" ? device.threads : std::thread::hardware_concurrency());
-}
-
 uint32_t width_of(const ImagePairs& p, uint32_t k) { return p.sizes ? p.sizes[2 * k] : p.width; }
 uint32_t height_of(const ImagePairs& p, uint32_t k) { return p.sizes ? p.sizes[2 * k + 1] : p.height; }
+
+// Where pair k starts: at[k] in the images, half[k] in the magnitudes.
+struct Offsets {
+  std::vector<size_t> at, half;
+  explicit Offsets(const ImagePairs& p) : at(p.count + 1, 0), half(p.count + 1, 0) {
+    for (uint32_t k = 0; k < p.count; ++k)
+      at[k + 1] = at[k] + p.pixels(k), half[k + 1] = half[k] + Engine::gmsd_half_size(width_of(p, k), height_of(p, k));
+  }
+};
 
 }  // namespace
 
 void Engine::gmsd_references(const ImagePairs& p, float* magnitudes) {
-  std::vector<size_t> at(p.count + 1, 0), half(p.count + 1, 0);
-  for (uint32_t k = 0; k < p.count; ++k)
-    at[k + 1] = at[k] + p.pixels(k), half[k + 1] = half[k] + gmsd_half_size(width_of(p, k), height_of(p, k));
+  const Offsets o(p);
   parallel_for(p.count, host_threads(*this), [&](uint32_t k) {
-    reference_one(p.first + at[k], width_of(p, k), height_of(p, k), magnitudes + half[k]);
+    reference_one(p.first + o.at[k], width_of(p, k), height_of(p, k), magnitudes + o.half[k]);
   }, 1);
 }
 
 std::vector<float> Engine::gmsd_against(const ImagePairs& p) {
-  std::vector<size_t> at(p.count + 1, 0), half(p.count + 1, 0);
-  for (uint32_t k = 0; k < p.count; ++k)
-    at[k + 1] = at[k] + p.pixels(k), half[k + 1] = half[k] + gmsd_half_size(width_of(p, k), height_of(p, k));
+  const Offsets o(p);
   std::vector<float> out(p.count);
   parallel_for(p.count, host_threads(*this), [&](uint32_t k) {
-    out[k] = against_one(p.first + half[k], p.second + at[k], width_of(p, k), height_of(p, k));
+    out[k] = against_one(p.first + o.half[k], p.second + o.at[k], width_of(p, k), height_of(p, k));
   }, 1);
   return out;
 }

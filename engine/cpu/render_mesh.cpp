@@ -347,8 +347,7 @@ void render_on_cpu(const Engine& engine, const MeshRenderDesc& d, const std::vec
   const size_t n = size_t(d.width) * d.height, stride = n * out.count * d.channels;
   const uint32_t tx = mesh::tiles_x(d), ty = mesh::tiles_y(d);
   std::vector<mesh::ViewSetup> setups(out.count);
-  const DeviceInfo device = engine.device();
-  const unsigned threads = std::max(1u, device.backend == "cpu" ? device.threads : std::thread::hardware_concurrency());
+  const unsigned threads = host_threads(engine);
   parallel_for(out.count, threads, [&](uint32_t v) { setups[v] = mesh::setup_view(space, v); }, 1);
   parallel_for(out.count * ty, threads, [&](uint32_t item) {
     const uint32_t v = item / ty, row = item % ty;
@@ -361,6 +360,11 @@ void render_on_cpu(const Engine& engine, const MeshRenderDesc& d, const std::vec
 }
 
 }  // namespace
+
+unsigned host_threads(const Engine& engine) {
+  const DeviceInfo device = engine.device();
+  return std::max(1u, device.backend == "cpu" ? device.threads : std::thread::hardware_concurrency());
+}
 
 void Engine::render_mesh(const MeshRenderDesc& d, MeshRenders& out) {
   render_on_cpu(*this, d, {{d.texture, d.texture_width, d.texture_height, d.mip_levels}}, out);

@@ -186,9 +186,9 @@ template <class T>
 using UninitializedVector = std::vector<T, UninitializedAllocator<T>>;
 
 // Renders, view after view: coverage (triangle index, kNoMeshTriangle where empty; none
-// without MeshRenderDesc::coverage) and
-// `channels` floats a pixel; with several textures (render_mesh_textures) the pixels hold
-// every view of the first texture, then every view of the next, coverage once. Every
+// without MeshRenderDesc::coverage) and `channels` floats a pixel; with several textures
+// (render_mesh_textures) the pixels hold every view of the first texture, then every view
+// of the next, coverage once. Every
 // element is written by the render. width, height and count are the cameras' (tiles', with
 // MeshRenderDesc::view_tiles_x/y: the pixels are the same in number, laid out as whole views).
 struct MeshRenders {
