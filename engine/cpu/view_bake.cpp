@@ -168,10 +168,30 @@ std::vector<float> bake_tile(const TileMap& m, const float* reference, uint32_t*
     bt -= mean * (float(rowsum) * inv_q);
     r[t] = bt;
   }
+  // Every CG vector stays 0 at the unseen texels (their row of A is the identity and their
+  // right-hand side 0), and half of a tile's texels are unseen on the shared assets (a
+  // triangle fills half of its box; Fox: 1,286 texels a tile, 597 seen). So the loops visit
+  // only each row's span of seen texels, and the flat loops the 8-texel chunks that hold
+  // one. A sum keeps its lanes (t mod 8) and order; it only skips terms that are exactly 0,
+  // which leave a partial sum as it was, so the bits are those of the loops over all texels.
+  const uint32_t h = m.height;
+  std::vector<uint32_t> lo(h, 0), hi(h, 0);  // row jj's seen texels lie in [lo, hi)
+  std::vector<uint32_t> chunks;             // chunks c (texels 8c .. 8c + 7, all < n) holding a seen texel
+  const uint32_t full = n / 8;              // chunks; texels from 8 full on are the tail
+  for (uint32_t jj = 0; jj < h; ++jj) {
+    const uint8_t* row = &seen[size_t(jj) * w];
+    uint32_t a = 0, b = w;
+    while (a < w && !row[a]) ++a;
+    while (b > a && !row[b - 1]) --b;
+    lo[jj] = a, hi[jj] = b;
+    if (a == b) continue;
+    for (uint32_t c = (jj * w + a) / 8; c <= (jj * w + b - 1) / 8 && c < full; ++c)
+      if (chunks.empty() || chunks.back() < c) chunks.push_back(c);
+  }
   // p lives in a zero-padded (w + 2) x (h + 2) tile, so the stencil reads its 9 neighbours
   // without bounds checks (the view_score.comp layout); out-of-tile terms add A * 0 = 0,
   // the same sums as skipping them.
-  const uint32_t h = m.height, W2 = w + 2;
+  const uint32_t W2 = w + 2;
   std::vector<float> pp(size_t(W2) * (h + 2), 0.0f);
   const int32_t offset[9] = {-int32_t(W2) - 1, -int32_t(W2), -int32_t(W2) + 1, -1, 0, 1,
                              int32_t(W2) - 1, int32_t(W2), int32_t(W2) + 1};
@@ -189,7 +209,7 @@ std::vector<float> bake_tile(const TileMap& m, const float* reference, uint32_t*
                   *a4 = plane[4] + row, *a5 = plane[5] + row, *a6 = plane[6] + row, *a7 = plane[7] + row,
                   *a8 = plane[8] + row;
       float* o = &out[row];
-      for (uint32_t ii = 0; ii < w; ++ii) {
+      for (uint32_t ii = lo[jj]; ii < hi[jj]; ++ii) {
         float acc = 0.0f;
         acc += a0[ii] * c0[ii];
         acc += a1[ii] * c1[ii];
@@ -206,19 +226,34 @@ std::vector<float> bake_tile(const TileMap& m, const float* reference, uint32_t*
   };
   // Dot products in 8 interleaved partial sums added in a fixed order: deterministic, and
   // not bound by the latency of one long chain of additions.
-  auto dot = [&](const float* a, const float* b, uint32_t count) {
+  auto dot = [&](const float* a, const float* b) {
     float part[8] = {};
-    uint32_t t = 0;
-    for (; t + 8 <= count; t += 8)
-      for (int k = 0; k < 8; ++k) part[k] += a[t + uint32_t(k)] * b[t + uint32_t(k)];
-    for (; t < count; ++t) part[t % 8] += a[t] * b[t];
+    for (const uint32_t c : chunks)
+      for (uint32_t k = 0; k < 8; ++k) part[k] += a[8 * c + k] * b[8 * c + k];
+    for (uint32_t t = 8 * full; t < n; ++t) part[t % 8] += a[t] * b[t];
     return ((part[0] + part[1]) + (part[2] + part[3])) + ((part[4] + part[5]) + (part[6] + part[7]));
+  };
+  // The two element-wise steps over the chunks and the tail (restrict: vector lanes).
+  float* __restrict xv = x.data();
+  float* __restrict rv = r.data();
+  float* __restrict zv = z.data();
+  const float* __restrict apv = Ap.data();
+  const float* __restrict dv = diag.data();
+  auto update = [&](float alpha) {  // x += alpha p, r -= alpha A p
+    for (const uint32_t c : chunks)
+      for (uint32_t k = 8 * c; k < 8 * c + 8; ++k) xv[k] += alpha * zv[k], rv[k] -= alpha * apv[k];
+    for (uint32_t t = 8 * full; t < n; ++t) xv[t] += alpha * zv[t], rv[t] -= alpha * apv[t];
+  };
+  auto precondition = [&] {  // z = D^-1 r
+    for (const uint32_t c : chunks)
+      for (uint32_t k = 8 * c; k < 8 * c + 8; ++k) zv[k] = rv[k] / dv[k];
+    for (uint32_t t = 8 * full; t < n; ++t) zv[t] = rv[t] / dv[t];
   };
   // Jacobi-preconditioned conjugate gradients from x = 0, until the last kBakeDelay terms
   // alpha_i (r_i . z_i) of the A-norm error (views.h) sum to at most the render tolerance.
   uint32_t it = 0;
   for (uint32_t t = 0; t < n; ++t) z[t] = r[t] / diag[t];
-  float rz = dot(r.data(), z.data(), n);
+  float rz = dot(r.data(), z.data());
   if (rz > 0.0f) {
     for (uint32_t jj = 0; jj < h; ++jj) std::copy_n(&z[size_t(jj) * w], w, &pp[size_t(jj + 1) * W2 + 1]);
     const float stop = kBakeRenderTolerance * kBakeRenderTolerance * count;
@@ -228,20 +263,20 @@ std::vector<float> bake_tile(const TileMap& m, const float* reference, uint32_t*
       apply(Ap);
       // p's interior, unpadded, for the dot product and the update of x.
       for (uint32_t jj = 0; jj < h; ++jj)
-        std::copy_n(&pp[size_t(jj + 1) * W2 + 1], w, &z[size_t(jj) * w]);
-      float alpha = rz / dot(z.data(), Ap.data(), n);
+        std::copy(&pp[size_t(jj + 1) * W2 + 1 + lo[jj]], &pp[size_t(jj + 1) * W2 + 1 + hi[jj]], &z[size_t(jj) * w + lo[jj]]);
+      float alpha = rz / dot(z.data(), Ap.data());
       error[it % kBakeDelay] = alpha * rz;
       ++it;
-      for (uint32_t t = 0; t < n; ++t) x[t] += alpha * z[t], r[t] -= alpha * Ap[t];
+      update(alpha);
       if (it >= kBakeDelay && (error[0] + error[1]) + (error[2] + error[3]) <= stop) break;
-      for (uint32_t t = 0; t < n; ++t) z[t] = r[t] / diag[t];
-      float rz_next = dot(r.data(), z.data(), n);
+      precondition();
+      float rz_next = dot(r.data(), z.data());
       float beta = rz_next / rz;
       rz = rz_next;
       for (uint32_t jj = 0; jj < h; ++jj) {
         float* p = &pp[size_t(jj + 1) * W2 + 1];
         const float* zr = &z[size_t(jj) * w];
-        for (uint32_t ii = 0; ii < w; ++ii) p[ii] = zr[ii] + beta * p[ii];
+        for (uint32_t ii = lo[jj]; ii < hi[jj]; ++ii) p[ii] = zr[ii] + beta * p[ii];
       }
     }
   }
