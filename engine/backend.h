@@ -5,6 +5,8 @@
 
 #include "engine.h"
 
+#include <array>
+
 namespace uvpress::engine {
 
 // Throws EngineError when a view set breaks the kernels' limits (size, ranges, guard band).
@@ -16,6 +18,12 @@ void check_mesh_render(const MeshRenderDesc& desc);
 // when large enough, and never shrunk then regrown within a call: a regrown vector is
 // zeroed; the renderers write every pixel).
 void size_mesh_renders(const MeshRenderDesc& desc, MeshRenders& out, uint32_t textures = 1);
+// Pixels a side of one view of `desc` as MeshRenders holds it (its tiles together, halved
+// with MeshRenderDesc::halve).
+std::array<uint32_t, 2> view_size(const MeshRenderDesc& desc);
+// MeshRenderDesc::halve after the fact: `full`, the renders of `desc` without it, into
+// `out`, every view by cpu::gmsd_downsample (the backends without a halving kernel).
+void halve_renders(const MeshRenderDesc& desc, const MeshRenders& full, MeshRenders& out);
 
 // Threads for the host code both backends run (render_mesh on the CPU, GMSD against
 // references): the CPU engine's own count, else the machine's.

@@ -2,6 +2,7 @@
 #include "mesh_render.h"
 
 #include "backend.h"
+#include "cpu/gmsd.h"
 
 #include <algorithm>
 #include <array>
@@ -23,6 +24,28 @@ void check_mesh_render(const MeshRenderDesc& d) {
   if (d.triangle_count >= kNoMeshTriangle) throw EngineError("render_mesh: too many triangles");
   for (size_t k = 0; k < 3 * d.triangle_count; ++k)
     if (d.indices[k] >= d.vertex_count) throw EngineError("render_mesh: index out of range");
+  if (d.halve && (d.channels != 1 || d.coverage))
+    throw EngineError("render_mesh: halved renders have one channel and no coverage");
+  if (d.halve && ((d.view_tiles_x > 1 && d.width % 2) || (d.view_tiles_y > 1 && d.height % 2)))
+    throw EngineError("render_mesh: halved views of several tiles need even tile sides");
+}
+
+std::array<uint32_t, 2> view_size(const MeshRenderDesc& d) {
+  const uint32_t w = d.view_tiles_x * d.width, h = d.view_tiles_y * d.height;
+  return d.halve ? std::array<uint32_t, 2>{(w + 1) / 2, (h + 1) / 2} : std::array<uint32_t, 2>{w, h};
+}
+
+void halve_renders(const MeshRenderDesc& d, const MeshRenders& full, MeshRenders& out) {
+  MeshRenderDesc whole = d;
+  whole.halve = false;
+  const auto [W, H] = view_size(whole);
+  const auto [w, h] = view_size(d);
+  const size_t views = d.cameras.size() / (size_t(d.view_tiles_x) * d.view_tiles_y), k_count = full.textures;
+  out.width = full.width, out.height = full.height, out.count = full.count, out.channels = 1, out.textures = full.textures;
+  out.coverage.clear();
+  out.pixels.resize(k_count * views * size_t(w) * h);
+  for (size_t i = 0; i < k_count * views; ++i)
+    cpu::gmsd_downsample(full.pixels.data() + i * size_t(W) * H, W, H, out.pixels.data() + i * size_t(w) * h);
 }
 
 uint32_t mip_chain_levels(uint32_t width, uint32_t height) {

@@ -144,17 +144,26 @@ void gmsd_reference(const Real* a, uint32_t width, uint32_t height, Real* g1) {
   gmsd_magnitude(d, w, h, g1);
 }
 
-// gmsd(a, b, width, height) from a's gmsd_reference, bit for bit.
+// gmsd(a, b, width, height) from a's gmsd_reference and b's gmsd_downsample (`half`), bit
+// for bit.
 template <class Real>
-Real gmsd_against(const Real* g1, const Real* b, uint32_t width, uint32_t height) {
+Real gmsd_against_halved(const Real* g1, const Real* half, uint32_t width, uint32_t height) {
   const uint32_t w = (width + 1) / 2, h = (height + 1) / 2;
   const size_t n = size_t(w) * h;
   if (n < 2) return Real(0);
-  Real* const d = gmsd_scratch<Real, 0>(2 * n);
-  Real* const g2 = d + n;
+  // Slots 0 and 1 may hold the caller's half and g1 (gmsd_against, gmsd).
+  Real* const g2 = gmsd_scratch<Real, 2>(n);
+  Real* const gms = gmsd_scratch<Real, 3>(n);
+  gmsd_magnitude(half, w, h, g2);
+  return gmsd_deviation(g1, g2, n, gms);
+}
+
+// gmsd(a, b, width, height) from a's gmsd_reference, bit for bit.
+template <class Real>
+Real gmsd_against(const Real* g1, const Real* b, uint32_t width, uint32_t height) {
+  Real* const d = gmsd_scratch<Real, 0>(size_t((width + 1) / 2) * ((height + 1) / 2));
   gmsd_downsample(b, width, height, d);
-  gmsd_magnitude(d, w, h, g2);
-  return gmsd_deviation(g1, g2, n, d);
+  return gmsd_against_halved(g1, d, width, height);
 }
 
 template <class Real>

@@ -3,6 +3,7 @@
 #include "mesh_render.h"
 
 #include "backend.h"
+#include "gmsd.h"
 #include "parallel_for.h"
 
 #include <algorithm>
@@ -240,11 +241,12 @@ __attribute__((always_inline)) inline void sample_tile(const TextureInSpace& x, 
 // Shades tile (tx, ty) of one view for every texture: one visibility pass and one
 // footprint per pixel, then every texture sampled; writes coverage (unless null) and pixels
 // of the camera's image (width x height, at `coverage` and `pixels`, rows row_stride apart:
-// a tile of a whole view, mesh::image_place), texture k's pixels texture_stride floats
-// after texture k - 1's. render_mesh.comp mirrors it, one texture, operation for operation.
+// a tile of a whole view, mesh::image_place; pixel (ox, oy) first: a buffer of the tile
+// alone), texture k's pixels texture_stride floats after texture k - 1's. render_mesh.comp mirrors it, one texture, operation for operation.
 __attribute__((target_clones("avx2", "default")))
 void shade_tile(const MeshRenderDesc& d, const std::vector<TextureInSpace>& textures, const ViewSetup& setup,
-                uint32_t tx, uint32_t ty, size_t texture_stride, size_t row_stride, uint32_t* coverage, float* pixels) {
+                uint32_t tx, uint32_t ty, size_t texture_stride, size_t row_stride, uint32_t* coverage, float* pixels,
+                uint32_t ox = 0, uint32_t oy = 0) {
   constexpr uint32_t T = shader::kMeshTile;
   uint32_t best_of[T * T];
   visible_in_tile(d, setup, tx, ty, best_of);
@@ -262,7 +264,7 @@ void shade_tile(const MeshRenderDesc& d, const std::vector<TextureInSpace>& text
   for (uint32_t j = j0; j < j1; ++j)
     for (uint32_t i = i0; i < i1; ++i) {
       const uint32_t best = best_of[(j - j0) * T + (i - i0)];
-      const size_t p = size_t(j) * row_stride + i;
+      const size_t p = size_t(j - oy) * row_stride + (i - ox);
       if (best == kNoMeshTriangle) {
         if (coverage) coverage[p] = kNoMeshTriangle;
         empty_row[j - j0] = true;
@@ -283,7 +285,7 @@ void shade_tile(const MeshRenderDesc& d, const std::vector<TextureInSpace>& text
   for (size_t k = 0; k < textures.size(); ++k)
     for (uint32_t j = j0; j < j1; ++j) {
       if (!empty_row[j - j0]) continue;
-      float* row = pixels + k * texture_stride + (size_t(j) * row_stride + i0) * C;
+      float* row = pixels + k * texture_stride + (size_t(j - oy) * row_stride + (i0 - ox)) * C;
       if (!whole) {
         std::fill(row, row + row_floats, 0.0f);
         continue;
@@ -315,7 +317,9 @@ void size_mesh_renders(const MeshRenderDesc& d, MeshRenders& out, uint32_t textu
   out.textures = textures;
   const size_t n = size_t(d.width) * d.height;
   out.coverage.resize(d.coverage ? n * out.count : 0);
-  out.pixels.resize(n * out.count * d.channels * textures);
+  const auto [w, h] = view_size(d);
+  const size_t views = d.cameras.size() / (size_t(d.view_tiles_x) * d.view_tiles_y);
+  out.pixels.resize(size_t(w) * h * views * d.channels * textures);
 }
 
 namespace {
@@ -349,13 +353,43 @@ void render_on_cpu(const Engine& engine, const MeshRenderDesc& d, const std::vec
   std::vector<mesh::ViewSetup> setups(out.count);
   const unsigned threads = host_threads(engine);
   parallel_for(out.count, threads, [&](uint32_t v) { setups[v] = mesh::setup_view(space, v); }, 1);
+  if (!d.halve) {
+    parallel_for(out.count * ty, threads, [&](uint32_t item) {
+      const uint32_t v = item / ty, row = item % ty;
+      const mesh::ImagePlace at = mesh::image_place(d, v);
+      for (uint32_t a = 0; a < tx; ++a)
+        mesh::shade_tile(space, in_space, setups[v], a, row, stride, at.row_stride,
+                         d.coverage ? out.coverage.data() + at.origin : nullptr,
+                         out.pixels.data() + at.origin * d.channels);
+    }, 1);
+    return;
+  }
+  // Halved (MeshRenderDesc::halve): each tile shaded into a buffer of its own, then
+  // halved into place by gmsd_downsample. Tiles start on even pixels of their views (tile
+  // and view-tile sides even, check_mesh_render), so a tile's 2 x 2 blocks are the view's,
+  // and the zero padding of an odd side falls where the view ends.
+  const auto [hw, hh] = view_size(d);
+  const size_t per_view = size_t(d.view_tiles_x) * d.view_tiles_y, half_stride = size_t(hw) * hh * (out.count / per_view);
+  constexpr uint32_t T = shader::kMeshTile;
   parallel_for(out.count * ty, threads, [&](uint32_t item) {
-    const uint32_t v = item / ty, row = item % ty;
-    const mesh::ImagePlace at = mesh::image_place(d, v);
-    for (uint32_t a = 0; a < tx; ++a)
-      mesh::shade_tile(space, in_space, setups[v], a, row, stride, at.row_stride,
-                       d.coverage ? out.coverage.data() + at.origin : nullptr,
-                       out.pixels.data() + at.origin * d.channels);
+    const uint32_t v = item / ty, row = item % ty, t = uint32_t(v % per_view);
+    thread_local std::vector<float> tile, half;
+    tile.resize(textures.size() * T * T), half.resize(T * T / 4);
+    const uint32_t th = std::min(T, d.height - row * T);
+    // The camera's image starts at (x0, y0) of its view, halved.
+    const size_t x0 = size_t(t % d.view_tiles_x) * d.width / 2, y0 = size_t(t / d.view_tiles_x) * d.height / 2;
+    const size_t view_at = (v / per_view) * size_t(hw) * hh;
+    for (uint32_t a = 0; a < tx; ++a) {
+      const uint32_t tw = std::min(T, d.width - a * T);
+      mesh::shade_tile(space, in_space, setups[v], a, row, size_t(T) * T, tw, nullptr, tile.data(), a * T, row * T);
+      for (size_t k = 0; k < textures.size(); ++k) {
+        cpu::gmsd_downsample(tile.data() + k * T * T, tw, th, half.data());
+        const uint32_t w2 = (tw + 1) / 2, h2 = (th + 1) / 2;
+        for (uint32_t j = 0; j < h2; ++j)
+          std::copy_n(&half[size_t(j) * w2], w2,
+                      out.pixels.data() + k * half_stride + view_at + (y0 + row * T / 2 + j) * hw + x0 + a * T / 2);
+      }
+    }
   }, 1);
 }
 

@@ -100,6 +100,9 @@ struct ImagePairs {
   const float* first = nullptr;  // the pairs' pixels, one image after the other
   const float* second = nullptr;
   const uint32_t* sizes = nullptr;
+  // Engine::gmsd_against only: the second images are halved already (MeshRenderDesc::halve),
+  // each (w + 1) / 2 x (h + 1) / 2 for a pair of w x h.
+  bool halved = false;
   size_t pixels(uint32_t k) const { return sizes ? size_t(sizes[2 * k]) * sizes[2 * k + 1] : size_t(width) * height; }
 };
 
@@ -146,6 +149,12 @@ struct MeshRenderDesc {
   // unlit scores). At eval's sizes its 4 bytes a pixel were as many stores as a
   // one-texture render's pixels (reparam's scoring of each candidate).
   bool coverage = true;
+  // true: each view's pixels as GMSD's first step leaves them (2 x 2 means, stride 2, zero
+  // padding past an odd side: cpu::gmsd_downsample, the same bits), (W + 1) / 2 x
+  // (H + 1) / 2 a view of W x H pixels, for callers that only score the renders against
+  // references (eval's curves: ImagePairs::halved): a quarter of the image to store and to
+  // read back. One channel, no coverage, and even tile sides where views are tiled.
+  bool halve = false;
 };
 
 // Texels in the first `levels` levels of a width x height mip chain (sizes as above).
@@ -188,9 +197,9 @@ using UninitializedVector = std::vector<T, UninitializedAllocator<T>>;
 // Renders, view after view: coverage (triangle index, kNoMeshTriangle where empty; none
 // without MeshRenderDesc::coverage) and `channels` floats a pixel; with several textures
 // (render_mesh_textures) the pixels hold every view of the first texture, then every view
-// of the next, coverage once. Every
-// element is written by the render. width, height and count are the cameras' (tiles', with
-// MeshRenderDesc::view_tiles_x/y: the pixels are the same in number, laid out as whole views).
+// of the next, coverage once. Every element is written by the render. width, height and
+// count are the cameras' (tiles', with MeshRenderDesc::view_tiles_x/y: the pixels are the
+// same in number, laid out as whole views; with MeshRenderDesc::halve, each view halved).
 struct MeshRenders {
   uint32_t width = 0, height = 0, count = 0, channels = 0, textures = 1;
   UninitializedVector<uint32_t> coverage;

@@ -254,7 +254,9 @@ class VulkanEngine final : public Engine {
 
   // Whole-mesh renders: see MeshRenderer.
   using Engine::render_mesh;
+  // render_mesh.comp renders whole views; MeshRenderDesc::halve is done on the host after.
   void render_mesh(const MeshRenderDesc& desc, MeshRenders& out) override {
+    if (desc.halve) return halved(desc, {{desc.texture, desc.texture_width, desc.texture_height, desc.mip_levels}}, out);
     if (!mesh_renderer_) mesh_renderer_ = std::make_unique<MeshRenderer>(context_, sequence_, max_buffer_);
     mesh_renderer_->render(desc, out);
   }
@@ -262,6 +264,7 @@ class VulkanEngine final : public Engine {
   void render_mesh_textures(const MeshRenderDesc& desc, const std::vector<MeshTexture>& textures,
                             MeshRenders& out) override {
     if (textures.empty()) throw EngineError("render_mesh_textures: no texture");
+    if (desc.halve) return halved(desc, textures, out);
     MeshRenderDesc d = desc;
     for (size_t k = 0; k < textures.size(); ++k) {
       d.texture = textures[k].texels;
@@ -278,6 +281,15 @@ class VulkanEngine final : public Engine {
       std::copy(texture_scratch_.pixels.begin(), texture_scratch_.pixels.end(),
                 out.pixels.begin() + long(k * texture_scratch_.pixels.size()));
     }
+  }
+
+  void halved(const MeshRenderDesc& desc, const std::vector<MeshTexture>& textures, MeshRenders& out) {
+    check_mesh_render(desc);
+    MeshRenderDesc whole = desc;
+    whole.halve = false;
+    MeshRenders full;
+    render_mesh_textures(whole, textures, full);
+    halve_renders(desc, full, out);
   }
 
   // Re-bake sampling: see Rebaker.

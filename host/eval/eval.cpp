@@ -418,16 +418,19 @@ struct RenderScratch {
 };
 
 // Renders every view of `m` once per texture of `textures`, chunk by chunk: fn(first view,
-// views, texture, pixels, coverage) with the `views` views' images (each width x height x
-// channels, one after the other) and their covered triangles, in `scratch` (valid until
-// the next render into it). Chunks hold views of one tile size, at most `per_chunk` of
-// them (0: about kChunkPixels for all the textures together). One texture is
+// views, texture, pixels, coverage, halved) with the `views` views' images (each width x
+// height x channels, one after the other) and their covered triangles, in `scratch` (valid
+// until the next render into it). Chunks hold views of one tile size, at most `per_chunk`
+// of them (0: about kChunkPixels for all the textures together). One texture is
 // Engine::render_mesh; several, Engine::render_mesh_textures (each view rasterized once).
 // Without `coverage` the renders have none (MeshRenderDesc::coverage) and fn is given null.
+// With `halve` (one channel, no coverage: renders only scored), chunks whose views need no
+// stitching are rendered halved (MeshRenderDesc::halve: each view (width + 1) / 2 x
+// (height + 1) / 2) and fn is told so (halved = true); the others come whole.
 template <class Fn>
 void render_views(engine::Engine& engine, const LayoutMesh& m, const std::vector<const Texture*>& textures,
                   const std::vector<ViewFrame>& frames, Timing& timing, RenderScratch& scratch, Fn&& fn,
-                  size_t per_chunk = 0, bool coverage = false) {
+                  size_t per_chunk = 0, bool coverage = false, bool halve = false) {
   const uint32_t C = textures.front()->channels;
   const size_t K = textures.size();
   engine::MeshRenderDesc d;
@@ -483,6 +486,9 @@ void render_views(engine::Engine& engine, const LayoutMesh& m, const std::vector
     }
     in_place = in_place && tiled;
     d.view_tiles_x = in_place ? f0.tiles_x : 1, d.view_tiles_y = in_place ? f0.tiles_y : 1;
+    // Halved where no view is stitched (tiled views: even tile sides, their 2 x 2 blocks the
+    // view's). Views of a chunk are alike in size then.
+    d.halve = halve && C == 1 && !coverage && (!tiled || (in_place && d.width % 2 == 0 && d.height % 2 == 0));
     const Stopwatch t_render;
     if (K == 1)
       engine.render_mesh(d, r);
@@ -490,9 +496,14 @@ void render_views(engine::Engine& engine, const LayoutMesh& m, const std::vector
       engine.render_mesh_textures(d, mesh_textures, r);
     timing.render += t_render.seconds();
     const size_t T = size_t(d.width) * d.height, rendered = T * d.cameras.size();  // pixels a texture
+    if (d.halve) {
+      const size_t half = views * engine::Engine::gmsd_half_size(f0.width, f0.height);  // a texture's
+      for (size_t k = 0; k < K; ++k) fn(first, views, k, r.pixels.data() + k * half, nullptr, true);
+      continue;
+    }
     if (!tiled || in_place) {
       for (size_t k = 0; k < K; ++k)
-        fn(first, views, k, r.pixels.data() + k * rendered * C, coverage ? r.coverage.data() : nullptr);
+        fn(first, views, k, r.pixels.data() + k * rendered * C, coverage ? r.coverage.data() : nullptr, false);
       continue;
     }
     const size_t base = f0.offset;
@@ -536,7 +547,7 @@ void render_views(engine::Engine& engine, const LayoutMesh& m, const std::vector
                       stitched_coverage.data() + row);
         }
       }
-      fn(first, views, k, stitched.data(), coverage ? stitched_coverage.data() : nullptr);
+      fn(first, views, k, stitched.data(), coverage ? stitched_coverage.data() : nullptr, false);
     }
   }
 }
@@ -546,7 +557,7 @@ template <class Fn>
 void render_views(engine::Engine& engine, const LayoutMesh& m, const Texture& tex, const std::vector<ViewFrame>& frames,
                   Timing& timing, RenderScratch& scratch, Fn&& fn, size_t per_chunk = 0, bool coverage = false) {
   render_views(engine, m, std::vector<const Texture*>{&tex}, frames, timing, scratch,
-               [&](size_t first, size_t views, size_t, const float* px, const uint32_t* covered) {
+               [&](size_t first, size_t views, size_t, const float* px, const uint32_t* covered, bool) {
                  fn(first, views, px, covered);
                },
                per_chunk, coverage);
@@ -567,7 +578,7 @@ struct ViewPairs {
   engine::ImagePairs pairs;  // points into sizes: not to be copied
   ViewPairs(const ViewPairs&) = delete;
   ViewPairs& operator=(const ViewPairs&) = delete;
-  ViewPairs(const float* first, const float* second, const ViewFrame* frames, size_t count) {
+  ViewPairs(const float* first, const float* second, const ViewFrame* frames, size_t count, bool halved = false) {
     bool one_size = true;
     for (size_t v = 0; v < count; ++v) {
       sizes.insert(sizes.end(), {frames[v].width, frames[v].height});
@@ -575,6 +586,7 @@ struct ViewPairs {
     }
     pairs = {frames[0].width, frames[0].height, uint32_t(count), first, second};
     if (!one_size) pairs.sizes = sizes.data();
+    pairs.halved = halved;
   }
 };
 
@@ -587,12 +599,13 @@ void reference_magnitudes(engine::Engine& engine, const float* ref, const ViewFr
   timing.gmsd += t0.seconds();
 }
 
-// GMSD of the views `frames` (pixels `img`, one view after the other) against the
-// reference views' magnitudes `ref` (reference_magnitudes): one call.
+// GMSD of the views `frames` (pixels `img`, one view after the other; halved: as
+// MeshRenderDesc::halve leaves them) against the reference views' magnitudes `ref`
+// (reference_magnitudes): one call.
 void gmsd_views(engine::Engine& engine, const float* ref, const float* img, const ViewFrame* frames, size_t count,
-                float* out, Timing& timing) {
+                float* out, Timing& timing, bool halved = false) {
   const Stopwatch t0;
-  const auto g = engine.gmsd_against(ViewPairs(ref, img, frames, count).pairs);
+  const auto g = engine.gmsd_against(ViewPairs(ref, img, frames, count, halved).pairs);
   std::copy(g.begin(), g.end(), out);
   timing.gmsd += t0.seconds();
 }
@@ -760,11 +773,11 @@ std::vector<Scores> score_views_many(engine::Engine& engine, const Setup& s, con
     // At least two views a chunk: GMSD runs a call's views in parallel.
     const size_t per_chunk = std::max<size_t>(2, 2 * kChunkPixels / (largest * driving.size()));
     render_views(engine, m, driving, views, timing, s.scratch,
-                 [&](size_t first, size_t count, size_t k, const float* px, const uint32_t*) {
+                 [&](size_t first, size_t count, size_t k, const float* px, const uint32_t*, bool halved) {
                    gmsd_views(engine, s.ref_views.unlit.data() + s.ref_views.at[first], px, &views[first], count,
-                              g[k].data() + first, timing);
+                              g[k].data() + first, timing, halved);
                  },
-                 per_chunk);
+                 per_chunk, false, true);
     for (auto& x : g) {
       Scores r;
       r.q = r.q_unlit = mean_of(x);
@@ -849,7 +862,7 @@ Scores score_against_own_reference(engine::Engine& engine, const Setup& s, const
   }
   std::vector<float> g(frames.size()), ref_chunk;
   render_views(engine, m, {&reference.driving, &tex.driving}, frames, timing, s.scratch,
-               [&](size_t first, size_t count, size_t k, const float* px, const uint32_t*) {
+               [&](size_t first, size_t count, size_t k, const float* px, const uint32_t*, bool) {
                  if (k == 0) {  // texture 0 of a chunk comes before texture 1
                    size_t n = 0;
                    for (size_t v = first; v < first + count; ++v)

@@ -3,6 +3,7 @@
 // floor, and the input curve's monotonicity on the shared assets.
 #include <catch2/catch.hpp>
 
+#include "cpu/gmsd.h"
 #include "engine.h"
 #include "eval/eval.h"
 #include "eval/resize.h"
@@ -350,6 +351,68 @@ TEST_CASE("render_mesh without coverage: the same pixels, no coverage, tiled or 
     CHECK(many_without.coverage.empty());
     CHECK(many_without.pixels == many_with.pixels);
     CHECK(many_with.coverage == with.coverage);
+  };
+  on_cpu_and_lavapipe(check);
+}
+
+TEST_CASE("render_mesh halved: each view as GMSD's first step leaves it, bit for bit, tiled or not, odd sides too",
+          "[eval][engine]") {
+  // eval's curves render their views halved (MeshRenderDesc::halve) and score them as such
+  // (ImagePairs::halved): the same 2 x 2 means as gmsd_downsample of the whole render, and
+  // the same GMSD.
+  const DemoViews demo(2);
+  engine::MeshRenderDesc tiled = demo.desc();
+  tiled.width = tiled.height = 256;
+  tiled.cameras = tile_cameras({demo.cameras[0], demo.cameras[7]}, 2);
+  tiled.view_tiles_x = tiled.view_tiles_y = 2;
+  tiled.coverage = false;
+  engine::MeshRenderDesc odd = demo.desc();  // one render a view, odd sides: zero padding
+  odd.width = 301, odd.height = 203;
+  odd.cameras = {demo.cameras[0], demo.cameras[7]};
+  odd.coverage = false;
+  // A second texture, darker: the two renders differ, so their GMSD is not 0.
+  std::vector<float> darker(demo.y);
+  for (float& v : darker) v *= 0.7f;
+  auto check = [&](engine::Engine& e, const char* name) {
+    INFO(name);
+    for (const engine::MeshRenderDesc* d : {&tiled, &odd}) {
+      INFO(d->width << " x " << d->height << " tiles, " << d->view_tiles_x << " x " << d->view_tiles_y << " a view");
+      engine::MeshRenderDesc h = *d;
+      h.halve = true;
+      const std::vector<engine::MeshTexture> two = {{d->texture, d->texture_width, d->texture_height, 1},
+                                                    {darker.data(), d->texture_width, d->texture_height, 1}};
+      engine::MeshRenders whole, halved;
+      e.render_mesh_textures(*d, two, whole);
+      e.render_mesh_textures(h, two, halved);
+      const uint32_t W = d->view_tiles_x * d->width, H = d->view_tiles_y * d->height, views = 2;
+      const size_t n = size_t(W) * H, m = engine::Engine::gmsd_half_size(W, H);
+      REQUIRE(whole.pixels.size() == 2 * views * n);
+      REQUIRE(halved.pixels.size() == 2 * views * m);
+      CHECK(halved.coverage.empty());
+      std::vector<float> expect(m);
+      size_t differ = 0, lit = 0;
+      for (size_t i = 0; i < 2 * views; ++i) {
+        engine::cpu::gmsd_downsample(whole.pixels.data() + i * n, W, H, expect.data());
+        for (size_t p = 0; p < m; ++p) differ += expect[p] != halved.pixels[i * m + p], lit += expect[p] > 0;
+      }
+      CHECK(differ == 0);
+      CHECK(lit > m / 2);  // the views show the asset
+      // Texture 1 scored against texture 0's views, from whole renders and from halved ones.
+      std::vector<float> magnitudes(views * m);
+      e.gmsd_references({W, H, views, whole.pixels.data(), nullptr}, magnitudes.data());
+      engine::ImagePairs from_whole{W, H, views, magnitudes.data(), whole.pixels.data() + views * n};
+      engine::ImagePairs from_halved{W, H, views, magnitudes.data(), halved.pixels.data() + views * m};
+      from_halved.halved = true;
+      const auto a = e.gmsd_against(from_whole), b = e.gmsd_against(from_halved);
+      CHECK(a == b);
+      CHECK(a[0] > 0.01f);
+    }
+    // Refused: coverage, several channels, odd sides of tiles laid out as one view.
+    engine::MeshRenderDesc bad = tiled;
+    bad.halve = true, bad.coverage = true;
+    CHECK_THROWS_AS(e.render_mesh(bad), engine::EngineError);
+    bad.coverage = false, bad.width = bad.height = 255;
+    CHECK_THROWS_AS(e.render_mesh(bad), engine::EngineError);
   };
   on_cpu_and_lavapipe(check);
 }
