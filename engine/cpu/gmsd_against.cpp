@@ -11,8 +11,11 @@ namespace {
 // Inlined into a clone for AVX2 where the CPU has it, as CpuEngine's gmsd(): the same fp32
 // operations per element in wider lanes, the same bits.
 __attribute__((target_clones("avx2", "default"), flatten)) void reference_one(const float* a, uint32_t w, uint32_t h,
-                                                                              float* g1) {
-  cpu::gmsd_reference<float>(a, w, h, g1);
+                                                                              float* g1, bool halved) {
+  if (halved)
+    cpu::gmsd_magnitude<float>(a, (w + 1) / 2, (h + 1) / 2, g1);
+  else
+    cpu::gmsd_reference<float>(a, w, h, g1);
 }
 __attribute__((target_clones("avx2", "default"), flatten)) float against_one(const float* g1, const float* b,
                                                                              uint32_t w, uint32_t h, bool halved) {
@@ -39,7 +42,7 @@ struct Offsets {
 void Engine::gmsd_references(const ImagePairs& p, float* magnitudes) {
   const Offsets o(p);
   parallel_for(p.count, host_threads(*this), [&](uint32_t k) {
-    reference_one(p.first + o.at[k], width_of(p, k), height_of(p, k), magnitudes + o.half[k]);
+    reference_one(p.first + o.at[k], width_of(p, k), height_of(p, k), magnitudes + o.half[k], p.halved);
   }, 1);
 }
 

@@ -242,7 +242,8 @@ __attribute__((always_inline)) inline void sample_tile(const TextureInSpace& x, 
 // footprint per pixel, then every texture sampled; writes coverage (unless null) and pixels
 // of the camera's image (width x height, at `coverage` and `pixels`, rows row_stride apart:
 // a tile of a whole view, mesh::image_place; pixel (ox, oy) first: a buffer of the tile
-// alone), texture k's pixels texture_stride floats after texture k - 1's. render_mesh.comp mirrors it, one texture, operation for operation.
+// alone), texture k's pixels texture_stride floats after texture k - 1's. render_mesh.comp
+// mirrors it, one texture, operation for operation.
 __attribute__((target_clones("avx2", "default")))
 void shade_tile(const MeshRenderDesc& d, const std::vector<TextureInSpace>& textures, const ViewSetup& setup,
                 uint32_t tx, uint32_t ty, size_t texture_stride, size_t row_stride, uint32_t* coverage, float* pixels,

@@ -100,8 +100,9 @@ struct ImagePairs {
   const float* first = nullptr;  // the pairs' pixels, one image after the other
   const float* second = nullptr;
   const uint32_t* sizes = nullptr;
-  // Engine::gmsd_against only: the second images are halved already (MeshRenderDesc::halve),
-  // each (w + 1) / 2 x (h + 1) / 2 for a pair of w x h.
+  // Engine::gmsd_references and gmsd_against only: the images (the references; the second
+  // ones) are halved already (MeshRenderDesc::halve), each (w + 1) / 2 x (h + 1) / 2 for a
+  // pair of w x h.
   bool halved = false;
   size_t pixels(uint32_t k) const { return sizes ? size_t(sizes[2 * k]) * sizes[2 * k + 1] : size_t(width) * height; }
 };

@@ -591,11 +591,12 @@ struct ViewPairs {
 };
 
 // The gradient magnitudes (Engine::gmsd_references) of the reference views `frames`
-// (pixels `ref`, one view after the other) into `out`, one view's after another.
+// (pixels `ref`, one view after the other; halved: as MeshRenderDesc::halve leaves them)
+// into `out`, one view's after another.
 void reference_magnitudes(engine::Engine& engine, const float* ref, const ViewFrame* frames, size_t count, float* out,
-                          Timing& timing) {
+                          Timing& timing, bool halved = false) {
   const Stopwatch t0;
-  engine.gmsd_references(ViewPairs(ref, nullptr, frames, count).pairs, out);
+  engine.gmsd_references(ViewPairs(ref, nullptr, frames, count, halved).pairs, out);
   timing.gmsd += t0.seconds();
 }
 
@@ -678,16 +679,19 @@ LitSurface lit_surface(const LayoutMesh& m) {
 }
 
 // Renders every view of `m` with `tex`: fn(first view, views, unlit luminance, lit
-// luminance or null when unlit), chunk by chunk. The unlit render is the same call as
-// ever (bit-identical unlit figures); the lit luminance is shaded on the host from each
-// map's render of the same views and the unlit render's coverage, views in parallel (no
-// shared sums: the same result for any thread count).
+// luminance or null when unlit, halved), chunk by chunk. Unlit, the views come halved where
+// they can (render_views: `halved` says so); the lit luminance is shaded on the host from
+// each map's render of the same views and the unlit render's coverage, views in parallel
+// (no shared sums: the same result for any thread count), all of them whole.
 template <class Fn>
 void render_scored_views(engine::Engine& engine, const Setup& s, const LayoutMesh& m, const LayoutTextures& tex,
                          const std::vector<ViewFrame>& frames, Timing& timing, Fn&& fn) {
   if (!s.lit) {
-    render_views(engine, m, tex.driving, frames, timing, s.scratch,
-                 [&](size_t first, size_t views, const float* px, const uint32_t*) { fn(first, views, px, nullptr); });
+    render_views(engine, m, {&tex.driving}, frames, timing, s.scratch,
+                 [&](size_t first, size_t views, size_t, const float* px, const uint32_t*, bool halved) {
+                   fn(first, views, px, nullptr, halved);
+                 },
+                 0, false, true);
     return;
   }
   const LitSurface surface = lit_surface(m);
@@ -716,7 +720,7 @@ void render_scored_views(engine::Engine& engine, const Setup& s, const LayoutMes
           lit_luminance(surface, s.rig, f.window(), f.width, f.height, coverage + at, maps, lit.data() + at);
         });
         timing.shading += t0.seconds();
-        fn(first, views, px, lit.data());
+        fn(first, views, px, lit.data(), false);
       },
       per_chunk, true);
 }
@@ -736,9 +740,10 @@ Scores score_views(engine::Engine& engine, const Setup& s, const LayoutMesh& m, 
   const std::vector<ViewFrame>& views = frames ? *frames : s.frames;
   const ReferenceViews& ref = ref_views ? *ref_views : s.ref_views;
   std::vector<float> g(views.size()), g_lit(s.lit ? views.size() : 0);
-  render_scored_views(engine, s, m, tex, views, timing, [&](size_t first, size_t count, const float* px, const float* lit) {
+  render_scored_views(engine, s, m, tex, views, timing, [&](size_t first, size_t count, const float* px, const float* lit,
+                                                             bool halved) {
     const size_t at = ref.at[first];
-    gmsd_views(engine, ref.unlit.data() + at, px, &views[first], count, g.data() + first, timing);
+    gmsd_views(engine, ref.unlit.data() + at, px, &views[first], count, g.data() + first, timing, halved);
     if (lit) gmsd_views(engine, ref.lit.data() + at, lit, &views[first], count, g_lit.data() + first, timing);
   });
   Scores r;
@@ -842,8 +847,9 @@ ReferenceViews reference_views(engine::Engine& engine, const Setup& s, const Lay
   for (const ViewFrame& f : frames) out.at.push_back(out.at.back() + engine::Engine::gmsd_half_size(f.width, f.height));
   out.unlit.resize(out.at.back());
   if (s.lit) out.lit.resize(out.unlit.size());
-  render_scored_views(engine, s, m, tex, frames, timing, [&](size_t first, size_t views, const float* px, const float* lit) {
-    reference_magnitudes(engine, px, &frames[first], views, out.unlit.data() + out.at[first], timing);
+  render_scored_views(engine, s, m, tex, frames, timing, [&](size_t first, size_t views, const float* px, const float* lit,
+                                                              bool halved) {
+    reference_magnitudes(engine, px, &frames[first], views, out.unlit.data() + out.at[first], timing, halved);
     if (lit) reference_magnitudes(engine, lit, &frames[first], views, out.lit.data() + out.at[first], timing);
   });
   return out;
@@ -862,17 +868,18 @@ Scores score_against_own_reference(engine::Engine& engine, const Setup& s, const
   }
   std::vector<float> g(frames.size()), ref_chunk;
   render_views(engine, m, {&reference.driving, &tex.driving}, frames, timing, s.scratch,
-               [&](size_t first, size_t count, size_t k, const float* px, const uint32_t*, bool) {
+               [&](size_t first, size_t count, size_t k, const float* px, const uint32_t*, bool halved) {
                  if (k == 0) {  // texture 0 of a chunk comes before texture 1
                    size_t n = 0;
                    for (size_t v = first; v < first + count; ++v)
                      n += engine::Engine::gmsd_half_size(frames[v].width, frames[v].height);
                    ref_chunk.resize(n);
-                   reference_magnitudes(engine, px, &frames[first], count, ref_chunk.data(), timing);
+                   reference_magnitudes(engine, px, &frames[first], count, ref_chunk.data(), timing, halved);
                    return;
                  }
-                 gmsd_views(engine, ref_chunk.data(), px, &frames[first], count, g.data() + first, timing);
-               });
+                 gmsd_views(engine, ref_chunk.data(), px, &frames[first], count, g.data() + first, timing, halved);
+               },
+               0, false, true);
   Scores r;
   r.q = r.q_unlit = mean_of(g);
   r.views = std::move(g);

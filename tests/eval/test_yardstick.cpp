@@ -357,9 +357,9 @@ TEST_CASE("render_mesh without coverage: the same pixels, no coverage, tiled or 
 
 TEST_CASE("render_mesh halved: each view as GMSD's first step leaves it, bit for bit, tiled or not, odd sides too",
           "[eval][engine]") {
-  // eval's curves render their views halved (MeshRenderDesc::halve) and score them as such
-  // (ImagePairs::halved): the same 2 x 2 means as gmsd_downsample of the whole render, and
-  // the same GMSD.
+  // eval's unlit scores render their views halved (MeshRenderDesc::halve) and score them
+  // as such (ImagePairs::halved): the same 2 x 2 means as gmsd_downsample of the whole
+  // render, the same reference magnitudes and the same GMSD.
   const DemoViews demo(2);
   engine::MeshRenderDesc tiled = demo.desc();
   tiled.width = tiled.height = 256;
@@ -398,8 +398,12 @@ TEST_CASE("render_mesh halved: each view as GMSD's first step leaves it, bit for
       CHECK(differ == 0);
       CHECK(lit > m / 2);  // the views show the asset
       // Texture 1 scored against texture 0's views, from whole renders and from halved ones.
-      std::vector<float> magnitudes(views * m);
+      std::vector<float> magnitudes(views * m), from_half(views * m);
       e.gmsd_references({W, H, views, whole.pixels.data(), nullptr}, magnitudes.data());
+      engine::ImagePairs half_references{W, H, views, halved.pixels.data(), nullptr};
+      half_references.halved = true;
+      e.gmsd_references(half_references, from_half.data());
+      CHECK(from_half == magnitudes);
       engine::ImagePairs from_whole{W, H, views, magnitudes.data(), whole.pixels.data() + views * n};
       engine::ImagePairs from_halved{W, H, views, magnitudes.data(), halved.pixels.data() + views * m};
       from_halved.halved = true;
