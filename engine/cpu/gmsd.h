@@ -84,14 +84,22 @@ void gmsd_magnitude(const Real* d, uint32_t w, uint32_t h, Real* g) {
   }
 }
 
-// The sum of v[0..n) in kGmsdLanes interleaved partial sums (term k to lane k mod
-// kGmsdLanes, each lane in order), the lanes then added pairwise in a fixed order: the same
-// bits on any machine, and not one addition waiting on the last (a serial sum of eval's
-// 848 x 848 similarity maps cost ~1 ms an image in latency alone, ~8 % of Fox's eval), and
-// nearer the exact sum than one long chain.
-constexpr size_t kGmsdLanes = 16;
+// The sum of term(0..n). Up to kGmsdSerialTerms terms (the per-triangle views' maps, 32 x
+// 32 at most) one after another, in order, as they always were: the triangle stage's
+// searches follow the last bits of every score, and a million of them are summed so. More
+// (eval's views) in kGmsdLanes interleaved partial sums (term k to lane k mod kGmsdLanes,
+// each lane in order), the lanes then added pairwise in a fixed order: the same bits on any
+// machine, not one addition waiting on the last (a serial sum of eval's 848 x 848 maps cost
+// ~1 ms an image in latency alone, ~8 % of Fox's eval), and nearer the exact sum than one
+// long chain (tests/engine/test_gmsd.cpp).
+constexpr size_t kGmsdLanes = 16, kGmsdSerialTerms = 4096;
 template <class Real, class Term>
 Real gmsd_sum(size_t n, Term&& term) {
+  if (n <= kGmsdSerialTerms) {
+    Real sum = 0;
+    for (size_t k = 0; k < n; ++k) sum += term(k);
+    return sum;
+  }
   Real part[kGmsdLanes] = {};
   size_t k = 0;
   for (; k + kGmsdLanes <= n; k += kGmsdLanes)
