@@ -32,7 +32,9 @@ uint32_t tiles_x(const MeshRenderDesc& d);
 uint32_t tiles_y(const MeshRenderDesc& d);
 
 // Where camera c's image lies in a render's pixels (MeshRenderDesc::view_tiles_x/y): the
-// index of its pixel (0, 0) and the pixels a row of its view holds.
+// index of its pixel (0, 0) and the pixels a row of its view holds; with
+// MeshRenderDesc::halve, of its halved image in the halved view (pixel (i, j) of the camera
+// at (i / 2, j / 2) from the origin).
 struct ImagePlace {
   size_t origin = 0, row_stride = 0;
 };

@@ -36,9 +36,7 @@ std::array<uint32_t, 2> view_size(const MeshRenderDesc& d) {
 }
 
 void halve_renders(const MeshRenderDesc& d, const MeshRenders& full, MeshRenders& out) {
-  MeshRenderDesc whole = d;
-  whole.halve = false;
-  const auto [W, H] = view_size(whole);
+  const uint32_t W = d.view_tiles_x * d.width, H = d.view_tiles_y * d.height;  // a whole view
   const auto [w, h] = view_size(d);
   const size_t views = d.cameras.size() / (size_t(d.view_tiles_x) * d.view_tiles_y), k_count = full.textures;
   out.width = full.width, out.height = full.height, out.count = full.count, out.channels = 1, out.textures = full.textures;
@@ -64,11 +62,12 @@ namespace mesh {
 
 ImagePlace image_place(const MeshRenderDesc& d, uint32_t c) {
   const uint32_t per_view = d.view_tiles_x * d.view_tiles_y, t = c % per_view;
-  const size_t n = size_t(d.width) * d.height;
+  const auto [w, h] = view_size(d);
+  // A tile's offset in its view, halved with the view (tile sides are even then).
+  const uint32_t tw = d.halve ? d.width / 2 : d.width, th = d.halve ? d.height / 2 : d.height;
   ImagePlace p;
-  p.row_stride = size_t(d.view_tiles_x) * d.width;
-  p.origin = size_t(c / per_view) * per_view * n + size_t(t / d.view_tiles_x) * d.height * p.row_stride +
-             size_t(t % d.view_tiles_x) * d.width;
+  p.row_stride = w;
+  p.origin = size_t(c / per_view) * w * h + size_t(t / d.view_tiles_x) * th * p.row_stride + size_t(t % d.view_tiles_x) * tw;
   return p;
 }
 

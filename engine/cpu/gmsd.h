@@ -86,12 +86,12 @@ void gmsd_magnitude(const Real* d, uint32_t w, uint32_t h, Real* g) {
 
 // The sum of term(0..n). Up to kGmsdSerialTerms terms (the per-triangle views' maps, 32 x
 // 32 at most) one after another, in order, as they always were: the triangle stage's
-// searches follow the last bits of every score, and a million of them are summed so. More
-// (eval's views) in kGmsdLanes interleaved partial sums (term k to lane k mod kGmsdLanes,
-// each lane in order), the lanes then added pairwise in a fixed order: the same bits on any
-// machine, not one addition waiting on the last (a serial sum of eval's 848 x 848 maps cost
-// ~1 ms an image in latency alone, ~8 % of Fox's eval), and nearer the exact sum than one
-// long chain (tests/engine/test_gmsd.cpp).
+// searches follow the last bits of every score (in lanes, its layouts took other paths and
+// `bench quality` ratios moved by up to 0.1). More (eval's views) in kGmsdLanes interleaved
+// partial sums (term k to lane k mod kGmsdLanes, each lane in order), the lanes then added
+// pairwise in a fixed order: the same bits on any machine, no addition waiting on the last
+// (Fox's eval spent 1.2 s in GMSD with one chain, 0.8 s in lanes), and nearer the exact sum
+// than one long chain (tests/engine/test_gmsd.cpp).
 constexpr size_t kGmsdLanes = 16, kGmsdSerialTerms = 4096;
 template <class Real, class Term>
 Real gmsd_sum(size_t n, Term&& term) {

@@ -369,26 +369,21 @@ void render_on_cpu(const Engine& engine, const MeshRenderDesc& d, const std::vec
   // halved into place by gmsd_downsample. Tiles start on even pixels of their views (tile
   // and view-tile sides even, check_mesh_render), so a tile's 2 x 2 blocks are the view's,
   // and the zero padding of an odd side falls where the view ends.
-  const auto [hw, hh] = view_size(d);
-  const size_t per_view = size_t(d.view_tiles_x) * d.view_tiles_y, half_stride = size_t(hw) * hh * (out.count / per_view);
+  const size_t half_stride = out.pixels.size() / textures.size();  // a texture's halved views
   constexpr uint32_t T = shader::kMeshTile;
   parallel_for(out.count * ty, threads, [&](uint32_t item) {
-    const uint32_t v = item / ty, row = item % ty, t = uint32_t(v % per_view);
+    const uint32_t v = item / ty, row = item % ty;
+    const mesh::ImagePlace at = mesh::image_place(d, v);
     thread_local std::vector<float> tile, half;
     tile.resize(textures.size() * T * T), half.resize(T * T / 4);
     const uint32_t th = std::min(T, d.height - row * T);
-    // The camera's image starts at (x0, y0) of its view, halved.
-    const size_t x0 = size_t(t % d.view_tiles_x) * d.width / 2, y0 = size_t(t / d.view_tiles_x) * d.height / 2;
-    const size_t view_at = (v / per_view) * size_t(hw) * hh;
     for (uint32_t a = 0; a < tx; ++a) {
-      const uint32_t tw = std::min(T, d.width - a * T);
+      const uint32_t tw = std::min(T, d.width - a * T), w2 = (tw + 1) / 2, h2 = (th + 1) / 2;
       mesh::shade_tile(space, in_space, setups[v], a, row, size_t(T) * T, tw, nullptr, tile.data(), a * T, row * T);
       for (size_t k = 0; k < textures.size(); ++k) {
         cpu::gmsd_downsample(tile.data() + k * T * T, tw, th, half.data());
-        const uint32_t w2 = (tw + 1) / 2, h2 = (th + 1) / 2;
-        for (uint32_t j = 0; j < h2; ++j)
-          std::copy_n(&half[size_t(j) * w2], w2,
-                      out.pixels.data() + k * half_stride + view_at + (y0 + row * T / 2 + j) * hw + x0 + a * T / 2);
+        float* to = out.pixels.data() + k * half_stride + at.origin + size_t(row * T / 2) * at.row_stride + a * T / 2;
+        for (uint32_t j = 0; j < h2; ++j) std::copy_n(&half[size_t(j) * w2], w2, to + j * at.row_stride);
       }
     }
   }, 1);

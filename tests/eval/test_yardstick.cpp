@@ -415,7 +415,9 @@ TEST_CASE("render_mesh halved: each view as GMSD's first step leaves it, bit for
     engine::MeshRenderDesc bad = tiled;
     bad.halve = true, bad.coverage = true;
     CHECK_THROWS_AS(e.render_mesh(bad), engine::EngineError);
-    bad.coverage = false, bad.width = bad.height = 255;
+    bad.coverage = false, bad.channels = 3;
+    CHECK_THROWS_AS(e.render_mesh(bad), engine::EngineError);
+    bad.channels = 1, bad.width = bad.height = 255;
     CHECK_THROWS_AS(e.render_mesh(bad), engine::EngineError);
   };
   on_cpu_and_lavapipe(check);
