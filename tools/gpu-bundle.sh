@@ -3,10 +3,12 @@
 # into DIR (default .gpu, git-ignored), with the Vulkan loader, glvnd and the
 # validation layer as Debian packages and the Duck and Fox sample assets, for a machine that
 # has none of the Debian packages: a lent GPU machine, where tools/gpu-check.sh runs it.
-# OpenImageIO links every codec plugin Debian builds (ffmpeg, OpenCV, OpenVDB, GDAL through
-# them: ~380 MB); uvpress reads and writes PNG and JPEG through libpng/libjpeg, so the plugin libraries are replaced by stubs that define the
-# symbols OpenImageIO imports from them, each returning a pointer to zeros (its static
-# initializers and its plugin catalogue call some: constructors, version strings).
+# uvpress_tests links OpenImageIO (its reference decoder and resize), which links every codec
+# plugin Debian builds (ffmpeg, OpenCV, OpenVDB, GDAL through them: ~380 MB); the tests use
+# its PNG and JPEG readers and its resize only, so the plugin libraries are replaced by stubs
+# that define the symbols OpenImageIO imports from them, each returning a pointer to zeros
+# (its static initializers and its plugin catalogue call some: constructors, version
+# strings). uvpress itself does not link OpenImageIO.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 out=${1:-.gpu}
@@ -15,7 +17,7 @@ skip_re='/(libc|libm|libpthread|libdl|librt|ld-linux-x86-64|libvulkan)\.so'
 rm -rf "$out/lib" "$out/lib.tar.xz" "$out/bin" "$out/stubs"
 mkdir -p "$out/lib" "$out/bin" "$out/stubs"
 cp build/tools/uvpress build/tests/uvpress_tests "$out/bin/"
-oiio=$(ldd build/tools/uvpress | awk '/libOpenImageIO\.so/ {print $3}')
+oiio=$(ldd build/tests/uvpress_tests | awk '/libOpenImageIO\.so/ {print $3}')
 # One stub per plugin library OpenImageIO names: the symbols it imports.
 for lib in $(readelf -d "$oiio" | sed -n 's/.*NEEDED.*\[\(.*\)\]/\1/p' | grep -E "$stub_re"); do
   path=$(ldd "$oiio" | awk -v l="$lib" '$1 == l {print $3}')

@@ -53,7 +53,7 @@ std::string one_line(std::string s) {
 }
 
 // Keeps each image's encoded bytes instead of decoding them: uvpress decodes on demand
-// with OpenImageIO, and untouched images are written back byte for byte.
+// (io/image_decode.h), and untouched images are written back byte for byte.
 bool keep_image_bytes(tinygltf::Image* image, const int index, std::string*, std::string*, int, int,
                       const unsigned char* bytes, int size, void* user) {
   auto& store = *static_cast<std::vector<std::vector<uint8_t>>*>(user);

@@ -1,24 +1,15 @@
 #include "io/image_io.h"
 
 #include "core/error.h"
+#include "io/image_decode.h"
 #include "io/jpeg_encode.h"
 #include "io/jpeg_header.h"
 #include "io/png_encode.h"
 
-#include <OpenImageIO/filesystem.h>
-#include <OpenImageIO/imageio.h>
-
 #include <array>
-#include <cstdio>
 #include <cstring>
-#include <fcntl.h>
-#include <memory>
-#include <mutex>
-#include <unistd.h>
 
 namespace uvpress::io {
-
-namespace oiio = OIIO;
 
 std::string sniff_image_format(const uint8_t* b, size_t n) {
   auto starts = [&](const char* magic, size_t len, size_t at = 0) {
@@ -43,76 +34,22 @@ std::string mime_of_format(const std::string& f) {
 
 namespace {
 
-// OpenImageIO's messages may span lines (libpng's are "...\nPNG read error: ..."); the user
-// gets one.
-std::string one_line(std::string s) {
-  while (!s.empty() && (s.back() == '\n' || s.back() == ' ')) s.pop_back();
-  for (size_t at; (at = s.find('\n')) != std::string::npos;) s.replace(at, 1, "; ");
-  return s.empty() ? "unreadable data" : s;
-}
-
-// libpng's default error handler (which OpenImageIO keeps) also prints each error on
-// stderr, while OpenImageIO returns the same text: keep stderr to one line per error by
-// sending fd 2 to /dev/null while a decoder runs. Serialized, since fd 2 is per process.
-class QuietStderr {
- public:
-  QuietStderr() : lock_(mutex()) {
-    std::fflush(stderr);
-    saved_ = ::dup(2);
-    int null = ::open("/dev/null", O_WRONLY | O_CLOEXEC);
-    if (saved_ >= 0 && null >= 0) ::dup2(null, 2);
-    if (null >= 0) ::close(null);
-  }
-  ~QuietStderr() {
-    if (saved_ >= 0) {
-      ::dup2(saved_, 2);
-      ::close(saved_);
-    }
-  }
-  QuietStderr(const QuietStderr&) = delete;
-  QuietStderr& operator=(const QuietStderr&) = delete;
-
- private:
-  static std::mutex& mutex() {
-    static std::mutex m;
-    return m;
-  }
-  std::lock_guard<std::mutex> lock_;
-  int saved_ = -1;
-};
-
-// Opens an in-memory PNG or JPEG; the proxy must outlive the input.
-std::unique_ptr<oiio::ImageInput> open_memory(const std::vector<uint8_t>& bytes, const std::string& name,
-                                              oiio::Filesystem::IOMemReader& proxy, std::string& format) {
+// Decodes an in-memory PNG or JPEG (its header alone when `header_only`).
+Image decode(const std::vector<uint8_t>& bytes, const std::string& name, bool header_only, std::string& format) {
   if (bytes.empty()) throw InputError(name, "image is empty (0 bytes)");
   format = sniff_image_format(bytes.data(), bytes.size());
   if (format.empty()) throw InputError(name, "image is not PNG or JPEG (unrecognized data)");
   if (format != "png" && format != "jpeg")
     throw InputError(name, "image format " + format + " is not supported (PNG and JPEG are)");
-  if (format == "png" && bytes.size() >= 24 && std::memcmp(&bytes[12], "IHDR", 4) == 0) {
-    // The declared size, before a decoder reads (or allocates) anything.
-    auto be32 = [&](size_t at) { return uint32_t(bytes[at]) << 24 | uint32_t(bytes[at + 1]) << 16 | uint32_t(bytes[at + 2]) << 8 | bytes[at + 3]; };
-    const uint32_t w = be32(16), h = be32(20);
-    if (w > kMaxImageSide || h > kMaxImageSide)
-      throw InputError(name, "image declares " + std::to_string(w) + "x" + std::to_string(h) + ", larger than the supported " +
-                                 std::to_string(kMaxImageSide) + " per side");
+  try {
+    return format == "png" ? decode_png(bytes.data(), bytes.size(), header_only, kMaxImageSide)
+                           : decode_jpeg(bytes.data(), bytes.size(), header_only, kMaxImageSide);
+  } catch (const ImageTooLarge& e) {
+    throw InputError(name, e.what());
+  } catch (const DecodeError& e) {
+    throw InputError(name, "corrupt " + format + " image: " + e.what());
   }
-  oiio::ImageSpec config;
-  config.attribute("oiio:UnassociatedAlpha", 1);  // keep straight alpha as stored, no premultiply
-  void* proxy_ptr = &proxy;
-  config.attribute("oiio:ioproxy", oiio::TypeDesc::PTR, &proxy_ptr);
-  auto in = oiio::ImageInput::open(format == "png" ? "memory.png" : "memory.jpg", &config, &proxy);
-  if (!in) throw InputError(name, "corrupt " + format + " image: " + one_line(oiio::geterror()));
-  const oiio::ImageSpec& s = in->spec();
-  if (s.width <= 0 || s.height <= 0 || s.nchannels <= 0 || s.nchannels > 4)
-    throw InputError(name, "image has an invalid size or channel count");
-  if (uint32_t(s.width) > kMaxImageSide || uint32_t(s.height) > kMaxImageSide)
-    throw InputError(name, "image is " + std::to_string(s.width) + "x" + std::to_string(s.height) +
-                               ", larger than the supported " + std::to_string(kMaxImageSide) + " per side");
-  return in;
 }
-
-uint32_t bits_of(const oiio::ImageSpec& s) { return s.format.size() >= 2 ? 16 : 8; }
 
 uint32_t le(const std::vector<uint8_t>& b, size_t at, int bytes) {
   uint32_t v = 0;
@@ -138,12 +75,9 @@ std::array<uint32_t, 2> declared_size(const std::vector<uint8_t>& b, const std::
 }  // namespace
 
 ImageHeader read_image_header(const std::vector<uint8_t>& bytes, const std::string& name) {
-  oiio::Filesystem::IOMemReader proxy(bytes.data(), bytes.size());
-  QuietStderr quiet;
   ImageHeader h;
-  auto in = open_memory(bytes, name, proxy, h.format);
-  const auto& s = in->spec();
-  h.width = uint32_t(s.width), h.height = uint32_t(s.height), h.channels = uint32_t(s.nchannels), h.bits = bits_of(s);
+  const Image image = decode(bytes, name, true, h.format);
+  h.width = image.width, h.height = image.height, h.channels = image.channels, h.bits = image.bits;
   return h;
 }
 
@@ -155,7 +89,7 @@ void check_image(const std::vector<uint8_t>& bytes, const std::string& mime_type
   if (!mime_type.empty() && mime_type != mime_of_format(format) && !jpg_alias)
     throw InputError(name, "holds " + format + " data, but its mimeType says '" + mime_type.substr(0, 40) + "'");
   if (format == "png" || format == "jpeg") {
-    read_image_header(bytes, name);  // opens the header with the decoder that re-bakes it
+    read_image_header(bytes, name);  // reads the header with the decoder that re-bakes it
     return;
   }
   const auto [w, h] = declared_size(bytes, format);
@@ -166,19 +100,8 @@ void check_image(const std::vector<uint8_t>& bytes, const std::string& mime_type
 }
 
 Image decode_image(const std::vector<uint8_t>& bytes, const std::string& name) {
-  oiio::Filesystem::IOMemReader proxy(bytes.data(), bytes.size());
-  QuietStderr quiet;
   std::string format;
-  auto in = open_memory(bytes, name, proxy, format);
-  const auto& s = in->spec();
-  Image image;
-  image.width = uint32_t(s.width), image.height = uint32_t(s.height), image.channels = uint32_t(s.nchannels);
-  image.bits = bits_of(s);
-  image.pixels.resize(size_t(image.width) * image.height * image.channels);
-  // Read as float: OIIO maps 8- and 16-bit unsigned values to [0,1] exactly (v / 255, v / 65535).
-  if (!in->read_image(0, 0, 0, s.nchannels, oiio::TypeDesc::FLOAT, image.pixels.data()))
-    throw InputError(name, "corrupt " + format + " image: " + one_line(in->geterror()));
-  return image;
+  return decode(bytes, name, false, format);
 }
 
 EncodeSettings encode_settings_of(const std::vector<uint8_t>& bytes) {

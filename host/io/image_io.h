@@ -1,5 +1,5 @@
-// Texture images through OpenImageIO: decode from the bytes a glTF carries (file, data:
-// URI or bufferView alike), encode back to PNG or JPEG. Formats are recognized by their
+// Texture images: decode from the bytes a glTF carries (file, data: URI or bufferView
+// alike; libpng and libjpeg, io/image_decode.h), encode back to PNG or JPEG. Formats are recognized by their
 // magic bytes, not by names, because glTF mimeTypes and URIs are often wrong.
 #pragma once
 

@@ -1,4 +1,4 @@
-// Image reader (OpenImageIO behind uvpress's checks): sniffing, header, full decode.
+// Image reader (libpng and libjpeg behind uvpress's checks, io/image_decode.h): sniffing, header, full decode.
 #include "core/error.h"
 #include "io/image_io.h"
 

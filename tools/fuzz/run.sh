@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Builds the libFuzzer targets (clang, ASan + UBSan) and runs each for its share of
 # TOTAL seconds (default 60): fuzz_gltf (glTF/GLB through load_gltf and build_asset),
-# fuzz_mesh (OBJ/OFF), fuzz_image (PNG/JPEG/... through OpenImageIO). Seeds: tools/fuzz/seeds,
+# fuzz_mesh (OBJ/OFF), fuzz_image (PNG/JPEG/... through io/image_decode.h). Seeds: tools/fuzz/seeds,
 # small generated PNG/JPEG, and ../shared/assets when present. Exits non-zero on the first
 # crash, leaving the input in BUILD/artifacts. Prints one line per target with its runs.
 set -euo pipefail

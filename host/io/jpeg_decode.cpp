@@ -1,0 +1,126 @@
+// JPEG decoding (io/image_decode.h). libjpeg reports errors by longjmp, so each step that
+// can fail runs in a function whose frame holds only plain data (no destructor is skipped),
+// and the buffers live in the caller.
+#include "io/image_decode.h"
+
+#include <jpeglib.h>
+#include <jerror.h>
+
+#include <algorithm>
+#include <array>
+#include <csetjmp>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+namespace uvpress::io {
+
+namespace {
+
+struct ErrorSink {
+  jpeg_error_mgr pub;  // first: libjpeg sees only this
+  std::jmp_buf jump;
+  char message[JMSG_LENGTH_MAX] = {0};
+};
+
+[[noreturn]] void fail(j_common_ptr cinfo) {
+  auto* sink = reinterpret_cast<ErrorSink*>(cinfo->err);
+  cinfo->err->format_message(cinfo, sink->message);
+  std::longjmp(sink->jump, 1);
+}
+// libjpeg's warnings. A stream that ends before the image does fails the decode: the rest
+// would be made-up grey, and a clear error is better than silent texels. Other damage libjpeg
+// skips (extraneous bytes, a corrupt segment it resynchronizes after) decodes as it did
+// through OpenImageIO. Every warning comes here, not only the first (as output_message).
+void on_message(j_common_ptr cinfo, int level) {
+  if (level < 0 && cinfo->err->msg_code == JWRN_JPEG_EOF) fail(cinfo);
+}
+
+struct Layout {
+  uint32_t width = 0, height = 0;
+  int components = 0;  // what libjpeg writes per texel (4 for CMYK)
+  bool cmyk = false;
+};
+
+bool read_header(jpeg_decompress_struct* cinfo, ErrorSink* sink, const uint8_t* bytes, size_t size, Layout* out) {
+  if (setjmp(sink->jump)) return false;
+  jpeg_mem_src(cinfo, bytes, static_cast<unsigned long>(size));
+  jpeg_read_header(cinfo, TRUE);
+  out->cmyk = cinfo->jpeg_color_space == JCS_CMYK || cinfo->jpeg_color_space == JCS_YCCK;
+  if (out->cmyk) cinfo->out_color_space = JCS_CMYK;  // YCCK to CMYK by libjpeg, to RGB below
+  out->width = cinfo->image_width, out->height = cinfo->image_height;
+  return true;
+}
+
+bool start(jpeg_decompress_struct* cinfo, ErrorSink* sink, Layout* out) {
+  if (setjmp(sink->jump)) return false;
+  jpeg_start_decompress(cinfo);
+  out->components = cinfo->output_components;
+  return true;
+}
+
+bool read_rows(jpeg_decompress_struct* cinfo, ErrorSink* sink, JSAMPARRAY rows, uint32_t height) {
+  if (setjmp(sink->jump)) return false;
+  while (cinfo->output_scanline < height) {
+    JSAMPARRAY at = rows + cinfo->output_scanline;
+    if (jpeg_read_scanlines(cinfo, at, height - cinfo->output_scanline) == 0) return false;
+  }
+  return true;
+}
+
+struct Decompress {
+  jpeg_decompress_struct cinfo;
+  ErrorSink sink;
+  Decompress() {
+    cinfo.err = jpeg_std_error(&sink.pub);
+    sink.pub.error_exit = fail;
+    sink.pub.emit_message = on_message;
+    jpeg_create_decompress(&cinfo);  // fails only on a library version mismatch
+  }
+  ~Decompress() { jpeg_destroy_decompress(&cinfo); }
+};
+
+}  // namespace
+
+Image decode_jpeg(const uint8_t* bytes, size_t size, bool header_only, uint32_t max_side) {
+  Decompress d;
+  Layout layout;
+  if (!read_header(&d.cinfo, &d.sink, bytes, size, &layout)) throw DecodeError(d.sink.message);
+  if (layout.width > max_side || layout.height > max_side) throw ImageTooLarge(layout.width, layout.height, max_side);
+  if (!start(&d.cinfo, &d.sink, &layout)) throw DecodeError(d.sink.message);
+  if (layout.cmyk ? layout.components != 4 : layout.components != 1 && layout.components != 3)
+    throw DecodeError("unsupported colour layout (" + std::to_string(layout.components) + " components)");
+  Image image;
+  image.width = layout.width, image.height = layout.height, image.bits = 8;
+  image.channels = layout.cmyk ? 3 : uint32_t(layout.components);
+  if (header_only) return image;
+
+  const size_t row_bytes = size_t(layout.width) * size_t(layout.components);
+  std::vector<JSAMPLE> stored(row_bytes * layout.height);
+  std::vector<JSAMPROW> rows(layout.height);
+  for (size_t y = 0; y < rows.size(); ++y) rows[y] = stored.data() + y * row_bytes;
+  if (!read_rows(&d.cinfo, &d.sink, rows.data(), layout.height))
+    throw DecodeError(d.sink.message[0] ? d.sink.message : "no more scanlines");
+
+  std::array<float, 256> value;
+  for (uint32_t v = 0; v < 256; ++v) value[v] = unorm_to_float(v, 255);
+  const size_t texels = size_t(image.width) * image.height;
+  image.pixels.resize(texels * image.channels);
+  if (!layout.cmyk) {
+    for (size_t i = 0; i < image.pixels.size(); ++i) image.pixels[i] = value[stored[i]];
+    return image;
+  }
+  // Adobe's CMYK is stored inverted (255 is no ink): R = C K etc. in [0,1], rounded to
+  // 8 bits as OpenImageIO did.
+  for (size_t i = 0; i < texels; ++i) {
+    const JSAMPLE* cmyk = &stored[4 * i];
+    const float k = value[cmyk[3]];
+    for (int c = 0; c < 3; ++c) {
+      const float r = std::clamp(value[cmyk[c]] * k * 255.0f + 0.5f, 0.0f, 255.0f);
+      image.pixels[3 * i + size_t(c)] = value[uint8_t(r)];
+    }
+  }
+  return image;
+}
+
+}  // namespace uvpress::io

@@ -1,0 +1,118 @@
+// PNG decoding (io/image_decode.h). libpng reports errors by longjmp, so each step that can
+// fail runs in a function whose frame holds only plain data (no destructor is skipped), and
+// the buffers live in the caller.
+#include "io/image_decode.h"
+
+#include <png.h>
+
+#include <array>
+#include <csetjmp>
+#include <cstdio>
+#include <cstring>
+#include <string>
+#include <vector>
+
+namespace uvpress::io {
+
+namespace {
+
+struct Source {
+  const uint8_t* data = nullptr;
+  size_t size = 0, at = 0;
+  char error[200] = {0};
+};
+
+void read_bytes(png_structp png, png_bytep out, png_size_t n) {
+  auto* src = static_cast<Source*>(png_get_io_ptr(png));
+  if (n > src->size - src->at) png_error(png, "the file ends early");
+  std::memcpy(out, src->data + src->at, n);
+  src->at += n;
+}
+void on_error(png_structp png, png_const_charp message) {
+  auto* src = static_cast<Source*>(png_get_error_ptr(png));
+  std::snprintf(src->error, sizeof src->error, "%s", message);
+  png_longjmp(png, 1);
+}
+void on_warning(png_structp, png_const_charp) {}
+
+struct Layout {
+  png_uint_32 width = 0, height = 0;
+  int bit_depth = 0, channels = 0;
+  size_t row_bytes = 0;
+};
+
+// The header, and the transforms that give OpenImageIO's texels: png_set_expand (palette
+// to RGB, tRNS to alpha, low-bit grey to 8 bits), 16-bit samples left big-endian. A side
+// over `max_side` stops before libpng sizes its row buffers, with the layout's width and
+// height set and nothing else.
+bool read_layout(png_structp png, png_infop info, uint32_t max_side, Layout* out) {
+  if (setjmp(png_jmpbuf(png))) return false;
+  png_set_user_limits(png, PNG_UINT_31_MAX, PNG_UINT_31_MAX);  // judged against max_side, below
+  png_read_info(png, info);
+  out->width = png_get_image_width(png, info);
+  out->height = png_get_image_height(png, info);
+  if (out->width > max_side || out->height > max_side) return true;
+  png_set_expand(png);
+  png_set_interlace_handling(png);
+  png_read_update_info(png, info);
+  out->bit_depth = png_get_bit_depth(png, info);
+  out->channels = png_get_channels(png, info);
+  out->row_bytes = png_get_rowbytes(png, info);
+  return true;
+}
+
+// The rows. libpng checks the image data's zlib stream to its end with the last row; the
+// chunks after it (metadata, IEND) are not read.
+bool read_rows(png_structp png, png_bytepp rows) {
+  if (setjmp(png_jmpbuf(png))) return false;
+  png_read_image(png, rows);
+  return true;
+}
+
+struct ReadStruct {
+  png_structp png = nullptr;
+  png_infop info = nullptr;
+  ~ReadStruct() { png_destroy_read_struct(&png, info ? &info : nullptr, nullptr); }
+};
+
+}  // namespace
+
+Image decode_png(const uint8_t* bytes, size_t size, bool header_only, uint32_t max_side) {
+  Source src;
+  src.data = bytes, src.size = size;
+  ReadStruct rs;
+  rs.png = png_create_read_struct(PNG_LIBPNG_VER_STRING, &src, on_error, on_warning);
+  if (rs.png) rs.info = png_create_info_struct(rs.png);
+  if (!rs.png || !rs.info) throw std::bad_alloc();
+  png_set_read_fn(rs.png, &src, read_bytes);
+
+  Layout layout;
+  if (!read_layout(rs.png, rs.info, max_side, &layout)) throw DecodeError(src.error);
+  if (layout.width > max_side || layout.height > max_side) throw ImageTooLarge(layout.width, layout.height, max_side);
+  if (layout.width == 0 || layout.height == 0 || layout.channels < 1 || layout.channels > 4 ||
+      (layout.bit_depth != 8 && layout.bit_depth != 16) ||
+      layout.row_bytes != size_t(layout.width) * size_t(layout.channels) * size_t(layout.bit_depth / 8))
+    throw DecodeError("unexpected layout after expansion");
+  Image image;
+  image.width = layout.width, image.height = layout.height;
+  image.channels = uint32_t(layout.channels), image.bits = uint32_t(layout.bit_depth);
+  if (header_only) return image;
+
+  std::vector<uint8_t> stored(layout.row_bytes * layout.height);
+  std::vector<png_bytep> rows(layout.height);
+  for (size_t y = 0; y < rows.size(); ++y) rows[y] = stored.data() + y * layout.row_bytes;
+  if (!read_rows(rs.png, rows.data())) throw DecodeError(src.error);
+
+  image.pixels.resize(size_t(image.width) * image.height * image.channels);
+  if (image.bits == 8) {
+    std::array<float, 256> value;
+    for (uint32_t v = 0; v < 256; ++v) value[v] = unorm_to_float(v, 255);
+    for (size_t i = 0; i < image.pixels.size(); ++i) image.pixels[i] = value[stored[i]];
+  } else {
+    for (size_t i = 0; i < image.pixels.size(); ++i)
+      image.pixels[i] = unorm_to_float(uint32_t(stored[2 * i]) << 8 | stored[2 * i + 1], 65535);
+  }
+  return image;
+}
+
+}  // namespace uvpress::io
