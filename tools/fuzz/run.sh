@@ -33,7 +33,7 @@ fi
 
 # A fixed seed and a fixed number of runs per target (capped by the time share) make the
 # CI step deterministic: what passed here passes there; a longer local run finds more.
-declare -A runs_of=([gltf]=${UVPRESS_FUZZ_RUNS_GLTF:-30000} [mesh]=${UVPRESS_FUZZ_RUNS_MESH:-200000} [image]=${UVPRESS_FUZZ_RUNS_IMAGE:-1000})
+declare -A runs_of=([gltf]=${UVPRESS_FUZZ_RUNS_GLTF:-30000} [mesh]=${UVPRESS_FUZZ_RUNS_MESH:-200000} [image]=${UVPRESS_FUZZ_RUNS_IMAGE:-8000})
 each=$(( total / 3 ))
 [ "$each" -ge 1 ] || each=1
 status=0
