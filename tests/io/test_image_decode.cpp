@@ -18,6 +18,7 @@
 #include <png.h>
 
 #include <cmath>
+#include <chrono>
 #include <csetjmp>
 #include <cstring>
 #include <random>
@@ -283,4 +284,31 @@ TEST_CASE("Damaged PNG and JPEG files fail where OpenImageIO failed or a JPEG en
     }
   }
   CHECK(failures >= cases / 2);  // truncation always fails: these cases test refusals, not only agreement
+}
+
+TEST_CASE("A header is read without allocating what the file declares", "[io][image]") {
+  using clock = std::chrono::steady_clock;
+  // A PNG whose first chunk after IHDR declares 1 GiB of tEXt, in a file of a few hundred
+  // bytes: libpng's text handler allocated and zeroed the declared size (8 s); now skipped.
+  auto png = io::encode_image(smooth_image(8, 8, 3), "png");
+  const uint8_t chunk[] = {0x40, 0x00, 0x00, 0x00, 't', 'E', 'X', 't', 'k', 'e', 'y', 0, 'v'};
+  png.insert(png.begin() + 33, chunk, chunk + sizeof chunk);  // after the signature and IHDR (8 + 25 bytes)
+  auto start = clock::now();
+  CHECK_THROWS_WITH(io::decode_image(png, "big-text.png"), Catch::Contains("corrupt png image"));
+  CHECK(std::chrono::duration<double>(clock::now() - start).count() < 1.0);
+  // A progressive JPEG whose frame header says 16384 x 16384: its header reads at once
+  // (starting the decoder would allocate the whole image's coefficients and read every scan).
+  io::EncodeSettings progressive;
+  progressive.format = "jpeg", progressive.progressive = true;
+  auto jpeg = io::encode_image(smooth_image(16, 16, 3), progressive);
+  size_t sof = 2;
+  while (sof + 9 < jpeg.size() && !(jpeg[sof] == 0xff && jpeg[sof + 1] == 0xc2)) ++sof;
+  REQUIRE(sof + 9 < jpeg.size());
+  jpeg[sof + 5] = 0x40, jpeg[sof + 6] = 0x00, jpeg[sof + 7] = 0x40, jpeg[sof + 8] = 0x00;  // height, width
+  start = clock::now();
+  const io::ImageHeader h = io::read_image_header(jpeg, "big.jpg");
+  CHECK(std::chrono::duration<double>(clock::now() - start).count() < 1.0);
+  CHECK(h.width == 16384);
+  CHECK(h.height == 16384);
+  CHECK(h.channels == 3);
 }
