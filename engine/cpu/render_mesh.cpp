@@ -383,7 +383,12 @@ void render_on_cpu(const Engine& engine, const MeshRenderDesc& d, const std::vec
       for (size_t k = 0; k < textures.size(); ++k) {
         cpu::gmsd_downsample(tile.data() + k * T * T, tw, th, half.data());
         float* to = out.pixels.data() + k * half_stride + at.origin + size_t(row * T / 2) * at.row_stride + a * T / 2;
-        for (uint32_t j = 0; j < h2; ++j) std::copy_n(&half[size_t(j) * w2], w2, to + j * at.row_stride);
+        // A whole tile's half rows are a constant size, copied inline (a memmove call for
+        // every 8 floats was 3 % of Fox's eval).
+        if (w2 == T / 2)
+          for (uint32_t j = 0; j < h2; ++j) std::memcpy(to + j * at.row_stride, &half[size_t(j) * w2], T / 2 * sizeof(float));
+        else
+          for (uint32_t j = 0; j < h2; ++j) std::copy_n(&half[size_t(j) * w2], w2, to + j * at.row_stride);
       }
     }
   }, 1);
