@@ -2,6 +2,7 @@
 // validator as a user would, scratch folders, and the CPU engine and the Vulkan one on lavapipe.
 #pragma once
 
+#include "core/image.h"
 #include "engine.h"
 
 #include <nlohmann/json.hpp>
@@ -55,6 +56,10 @@ void check_input_error(const Scratch& dir, const std::string& args, const fs::pa
 
 // A file's bytes (empty when it cannot be read), its JSON, and a text file of `lines`.
 std::string read_file(const fs::path& p);
+// Smooth colour with some detail, many more than 256 colours (as a re-baked texture has),
+// in 8-bit values, alpha (2 and 4 channels) opaque: the image the encoders' and decoders'
+// tests write.
+Image smooth_image(uint32_t w, uint32_t h, uint32_t channels);
 nlohmann::json read_json(const fs::path& p);
 void write_lines(const fs::path& p, const std::vector<std::string>& lines);
 

@@ -27,20 +27,29 @@ inline uint32_t slot(int32_t di, int32_t dj) { return uint32_t((di + 1) + 3 * (d
 // their callers, so GCC's note that passing 32-byte vectors by value differs between
 // targets, -Wpsabi, concerns no call that exists: ignored in this file.)
 #pragma GCC diagnostic ignored "-Wpsabi"
-typedef float f8 __attribute__((vector_size(32)));
-inline f8 load8(const float* at) {
-  f8 v;
+template <class T>
+struct Lanes;
+template <>
+struct Lanes<float> {
+  typedef float type __attribute__((vector_size(32)));
+};
+template <>
+struct Lanes<int32_t> {
+  typedef int32_t type __attribute__((vector_size(32)));
+};
+typedef Lanes<float>::type f8;
+typedef Lanes<int32_t>::type i8;
+// Eight values from or to memory at any alignment.
+template <class T>
+inline typename Lanes<T>::type load8(const T* at) {
+  typename Lanes<T>::type v;
   std::memcpy(&v, at, sizeof v);
   return v;
 }
-inline void store8(float* at, f8 v) { std::memcpy(at, &v, sizeof v); }
-typedef int32_t i8 __attribute__((vector_size(32)));
-inline i8 load8(const int32_t* at) {
-  i8 v;
-  std::memcpy(&v, at, sizeof v);
-  return v;
+template <class T>
+inline void store8(T* at, typename Lanes<T>::type v) {
+  std::memcpy(at, &v, sizeof v);
 }
-inline void store8(int32_t* at, i8 v) { std::memcpy(at, &v, sizeof v); }
 // fixed() of each lane.
 inline i8 fixed8(f8 x) { return __builtin_convertvector(x * kFixedPoint + 0.5f, i8); }
 // The lanes' partial sums added in a fixed order.

@@ -84,6 +84,14 @@ struct ReadStruct {
 }  // namespace
 
 Image decode_png(const uint8_t* bytes, size_t size, bool header_only, uint32_t max_side) {
+  // The declared size first, from IHDR's bytes: a file cut after its header still says
+  // how large it claims to be (libpng reads on to the first IDAT before it tells).
+  if (size >= 24 && std::memcmp(bytes + 12, "IHDR", 4) == 0) {
+    auto be32 = [&](size_t at) {
+      return uint32_t(bytes[at]) << 24 | uint32_t(bytes[at + 1]) << 16 | uint32_t(bytes[at + 2]) << 8 | bytes[at + 3];
+    };
+    if (be32(16) > max_side || be32(20) > max_side) throw ImageTooLarge(be32(16), be32(20), max_side);
+  }
   Source src;
   src.data = bytes, src.size = size;
   ReadStruct rs;

@@ -22,22 +22,7 @@ using namespace uvpress;
 
 namespace {
 
-// Smooth colour with some detail: many more than 256 colours, as a re-baked texture has.
-Image smooth_image(uint32_t w, uint32_t h, uint32_t channels) {
-  Image img;
-  img.width = w, img.height = h, img.channels = channels;
-  img.pixels.resize(size_t(w) * h * channels);
-  for (uint32_t y = 0; y < h; ++y)
-    for (uint32_t x = 0; x < w; ++x)
-      for (uint32_t c = 0; c < channels; ++c)
-        img.at(x, y, c) = 0.5f + 0.35f * std::sin(0.05f * float(x) * float(c + 1) + 0.03f * float(y)) +
-                          0.1f * std::cos(0.31f * float(x + 2 * y) * float(3 - c % 3));
-  if (channels == 2 || channels == 4)
-    for (uint32_t y = 0; y < h; ++y)
-      for (uint32_t x = 0; x < w; ++x) img.at(x, y, channels - 1) = 1.0f;
-  for (float& v : img.pixels) v = std::round(std::clamp(v, 0.0f, 1.0f) * 255.0f) / 255.0f;
-  return img;
-}
+using test::smooth_image;
 
 // IHDR colour type: 0 grey, 2 RGB, 3 palette, 4 grey+alpha, 6 RGBA.
 int png_color_type(const std::vector<uint8_t>& png) { return png.size() > 25 ? png[25] : -1; }

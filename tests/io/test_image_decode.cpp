@@ -185,16 +185,7 @@ std::vector<uint8_t> make_cmyk_jpeg(bool ycck) {
   return bytes;
 }
 
-Image smooth_image(uint32_t w, uint32_t h, uint32_t channels) {
-  Image img;
-  img.width = w, img.height = h, img.channels = channels;
-  img.pixels.resize(size_t(w) * h * channels);
-  for (uint32_t y = 0; y < h; ++y)
-    for (uint32_t x = 0; x < w; ++x)
-      for (uint32_t c = 0; c < channels; ++c)
-        img.at(x, y, c) = 0.5f + 0.45f * std::sin(0.21f * float(x * (c + 1)) + 0.13f * float(y) + float(c));
-  return img;
-}
+using test::smooth_image;
 
 }  // namespace
 
