@@ -32,13 +32,14 @@ inline float unorm_to_float(uint32_t v, uint32_t largest) { return float(v) * (1
 // width, height, channels (1 grey, 2 grey+alpha, 3 RGB, 4 RGBA) and bits (8 or 16), and
 // the texels unless `header_only`. Sides over `max_side` throw ImageTooLarge. libpng's
 // warnings are not printed; its errors throw DecodeError. Chunks after the image data are
-// not read (OpenImageIO did not read them either).
+// not read (OpenImageIO read them for interlaced files only, and refused a damaged tail).
 Image decode_png(const uint8_t* bytes, size_t size, bool header_only, uint32_t max_side);
 
 // JPEG (io/jpeg_decode.cpp): libjpeg's default decode (islow IDCT, fancy upsampling) to
 // grey or RGB, 8 bits; CMYK and YCCK files become RGB as C*K, M*K, Y*K of the stored
-// (inverted) values. A stream that ends early is an error (OpenImageIO filled the rest with
-// grey); other damage libjpeg skips with a warning decodes as it did through OpenImageIO.
+// (inverted) values. Entropy-coded data that ends before the image does is an error
+// (OpenImageIO filled the rest with grey); a file that lacks only its EOI marker decodes;
+// other damage libjpeg skips with a warning decodes as it did through OpenImageIO.
 Image decode_jpeg(const uint8_t* bytes, size_t size, bool header_only, uint32_t max_side);
 
 }  // namespace uvpress::io

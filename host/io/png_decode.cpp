@@ -16,26 +16,26 @@ namespace uvpress::io {
 
 namespace {
 
-struct Source {
+struct PngSource {
   const uint8_t* data = nullptr;
   size_t size = 0, at = 0;
   char error[200] = {0};
 };
 
-void read_bytes(png_structp png, png_bytep out, png_size_t n) {
-  auto* src = static_cast<Source*>(png_get_io_ptr(png));
+void read_png_bytes(png_structp png, png_bytep out, png_size_t n) {
+  auto* src = static_cast<PngSource*>(png_get_io_ptr(png));
   if (n > src->size - src->at) png_error(png, "the file ends early");
   std::memcpy(out, src->data + src->at, n);
   src->at += n;
 }
-void on_error(png_structp png, png_const_charp message) {
-  auto* src = static_cast<Source*>(png_get_error_ptr(png));
+void on_png_read_error(png_structp png, png_const_charp message) {
+  auto* src = static_cast<PngSource*>(png_get_error_ptr(png));
   std::snprintf(src->error, sizeof src->error, "%s", message);
   png_longjmp(png, 1);
 }
-void on_warning(png_structp, png_const_charp) {}
+void on_png_read_warning(png_structp, png_const_charp) {}
 
-struct Layout {
+struct PngLayout {
   png_uint_32 width = 0, height = 0;
   int bit_depth = 0, channels = 0;
   size_t row_bytes = 0;
@@ -45,7 +45,7 @@ struct Layout {
 // to RGB, tRNS to alpha, low-bit grey to 8 bits), 16-bit samples left big-endian. A side
 // over `max_side` stops before libpng sizes its row buffers, with the layout's width and
 // height set and nothing else.
-bool read_layout(png_structp png, png_infop info, uint32_t max_side, Layout* out) {
+bool read_png_layout(png_structp png, png_infop info, uint32_t max_side, PngLayout* out) {
   if (setjmp(png_jmpbuf(png))) return false;
   png_set_user_limits(png, PNG_UINT_31_MAX, PNG_UINT_31_MAX);  // judged against max_side, below
   // No ancillary chunk changes the texels (no gamma or colour conversion is applied), so
@@ -68,17 +68,18 @@ bool read_layout(png_structp png, png_infop info, uint32_t max_side, Layout* out
 }
 
 // The rows. libpng checks the image data's zlib stream to its end with the last row; the
-// chunks after it (metadata, IEND) are not read.
-bool read_rows(png_structp png, png_bytepp rows) {
+// chunks after it (metadata, IEND) are not read (OpenImageIO read them for interlaced
+// files only).
+bool read_png_rows(png_structp png, png_bytepp rows) {
   if (setjmp(png_jmpbuf(png))) return false;
   png_read_image(png, rows);
   return true;
 }
 
-struct ReadStruct {
+struct PngReadStruct {
   png_structp png = nullptr;
   png_infop info = nullptr;
-  ~ReadStruct() { png_destroy_read_struct(&png, info ? &info : nullptr, nullptr); }
+  ~PngReadStruct() { png_destroy_read_struct(&png, info ? &info : nullptr, nullptr); }
 };
 
 }  // namespace
@@ -92,16 +93,16 @@ Image decode_png(const uint8_t* bytes, size_t size, bool header_only, uint32_t m
     };
     if (be32(16) > max_side || be32(20) > max_side) throw ImageTooLarge(be32(16), be32(20), max_side);
   }
-  Source src;
+  PngSource src;
   src.data = bytes, src.size = size;
-  ReadStruct rs;
-  rs.png = png_create_read_struct(PNG_LIBPNG_VER_STRING, &src, on_error, on_warning);
+  PngReadStruct rs;
+  rs.png = png_create_read_struct(PNG_LIBPNG_VER_STRING, &src, on_png_read_error, on_png_read_warning);
   if (rs.png) rs.info = png_create_info_struct(rs.png);
   if (!rs.png || !rs.info) throw std::bad_alloc();
-  png_set_read_fn(rs.png, &src, read_bytes);
+  png_set_read_fn(rs.png, &src, read_png_bytes);
 
-  Layout layout;
-  if (!read_layout(rs.png, rs.info, max_side, &layout)) throw DecodeError(src.error);
+  PngLayout layout;
+  if (!read_png_layout(rs.png, rs.info, max_side, &layout)) throw DecodeError(src.error);
   if (layout.width > max_side || layout.height > max_side) throw ImageTooLarge(layout.width, layout.height, max_side);
   if (layout.width == 0 || layout.height == 0 || layout.channels < 1 || layout.channels > 4 ||
       (layout.bit_depth != 8 && layout.bit_depth != 16) ||
@@ -115,7 +116,7 @@ Image decode_png(const uint8_t* bytes, size_t size, bool header_only, uint32_t m
   std::vector<uint8_t> stored(layout.row_bytes * layout.height);
   std::vector<png_bytep> rows(layout.height);
   for (size_t y = 0; y < rows.size(); ++y) rows[y] = stored.data() + y * layout.row_bytes;
-  if (!read_rows(rs.png, rows.data())) throw DecodeError(src.error);
+  if (!read_png_rows(rs.png, rows.data())) throw DecodeError(src.error);
 
   image.pixels.resize(size_t(image.width) * image.height * image.channels);
   if (image.bits == 8) {

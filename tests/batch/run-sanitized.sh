@@ -9,8 +9,8 @@
 # (two processes; and uvpress now starts once, not twice: the malformed-asset case 340 -> 193 s).
 # -O1 builds for 5 min and saves no test time. Any sanitizer report makes uvpress exit
 # with a code other than 0 or 1, or prints a report the tests look for, so the corpus
-# tests fail on it. Leak checking is off: the Vulkan loader and OpenImageIO keep
-# process-lifetime allocations that are not bugs.
+# tests fail on it. Leak checking is off: the Vulkan loader keeps process-lifetime
+# allocations that are not bugs.
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 build=${UVPRESS_ASAN_BUILD:-$root/build-asan}
