@@ -63,16 +63,16 @@ std::vector<std::string> RunResult::err_lines() const {
   return lines;
 }
 
-Image smooth_image(uint32_t w, uint32_t h, uint32_t channels) {
+Image smooth_image(uint32_t w, uint32_t h, uint32_t channels, bool opaque_alpha, Waves waves) {
   Image img;
   img.width = w, img.height = h, img.channels = channels;
   img.pixels.resize(size_t(w) * h * channels);
   for (uint32_t y = 0; y < h; ++y)
     for (uint32_t x = 0; x < w; ++x)
       for (uint32_t c = 0; c < channels; ++c)
-        img.at(x, y, c) = 0.5f + 0.35f * std::sin(0.05f * float(x) * float(c + 1) + 0.03f * float(y)) +
-                          0.1f * std::cos(0.31f * float(x + 2 * y) * float(3 - c % 3));
-  if (channels == 2 || channels == 4)
+        img.at(x, y, c) = 0.5f + 0.35f * std::sin(waves.x_freq * float(x) * float(c + 1) + waves.y_freq * float(y)) +
+                          0.1f * std::cos(waves.detail_freq * float(x + 2 * y) * float(3 - c % 3));
+  if (opaque_alpha && (channels == 2 || channels == 4))
     for (uint32_t y = 0; y < h; ++y)
       for (uint32_t x = 0; x < w; ++x) img.at(x, y, channels - 1) = 1.0f;
   for (float& v : img.pixels) v = std::round(std::clamp(v, 0.0f, 1.0f) * 255.0f) / 255.0f;

@@ -57,9 +57,13 @@ void check_input_error(const Scratch& dir, const std::string& args, const fs::pa
 // A file's bytes (empty when it cannot be read), its JSON, and a text file of `lines`.
 std::string read_file(const fs::path& p);
 // Smooth colour with some detail, many more than 256 colours (as a re-baked texture has),
-// in 8-bit values, alpha (2 and 4 channels) opaque: the image the encoders' and decoders'
-// tests write.
-Image smooth_image(uint32_t w, uint32_t h, uint32_t channels);
+// in 8-bit values: 0.5 + 0.35 sin(x_freq x (c + 1) + y_freq y) + 0.1 cos(detail_freq (x + 2y)
+// (3 - c mod 3)) in channel c; alpha (2 and 4 channels) opaque unless the alpha varies too.
+// The image the codecs' tests write.
+struct Waves {
+  float x_freq = 0.05f, y_freq = 0.03f, detail_freq = 0.31f;
+};
+Image smooth_image(uint32_t w, uint32_t h, uint32_t channels, bool opaque_alpha = true, Waves waves = {});
 nlohmann::json read_json(const fs::path& p);
 void write_lines(const fs::path& p, const std::vector<std::string>& lines);
 

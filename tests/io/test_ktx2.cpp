@@ -57,16 +57,7 @@ nlohmann::json inspect(const fs::path& ktx2, const fs::path& astc_prefix = {}) {
 
 // Smooth colour with detail, 8-bit values; alpha (4 channels) varies too.
 Image test_image(uint32_t w, uint32_t h, uint32_t channels) {
-  Image img;
-  img.width = w, img.height = h, img.channels = channels;
-  img.pixels.resize(size_t(w) * h * channels);
-  for (uint32_t y = 0; y < h; ++y)
-    for (uint32_t x = 0; x < w; ++x)
-      for (uint32_t c = 0; c < channels; ++c)
-        img.at(x, y, c) = 0.5f + 0.35f * std::sin(0.09f * float(x) * float(c + 1) + 0.05f * float(y)) +
-                          0.1f * std::cos(0.41f * float(x + 2 * y) * float(3 - c % 3));
-  for (float& v : img.pixels) v = std::round(std::clamp(v, 0.0f, 1.0f) * 255.0f) / 255.0f;
-  return img;
+  return test::smooth_image(w, h, channels, false, {0.09f, 0.05f, 0.41f});
 }
 
 // The first `channels` channels of `image` (a decoder may add alpha).
