@@ -197,16 +197,19 @@ std::vector<float> bake_tile(const TileMap& m, const float* reference, uint32_t*
   }
   // Texel t is corner 00 of cell t, 10 of t - 1, 01 of t - w and 11 of t - w - 1 (a cell
   // across the tile's edge, or of the last row or column, holds zeros).
-  auto cells_of = [&](uint32_t t, const int32_t** c00, const int32_t** c10, const int32_t** c01, const int32_t** c11) {
-    *c00 = C + 16 * size_t(t), *c10 = *c00 - 16, *c01 = *c00 - 16 * size_t(w), *c11 = *c01 - 16;
+  struct Corners {
+    const int32_t *c00, *c10, *c01, *c11;
+  };
+  auto corners = [&](uint32_t t) {
+    const int32_t* c00 = C + 16 * size_t(t);
+    return Corners{c00, c00 - 16, c00 - 16 * size_t(w), c00 - 16 * size_t(w) - 16};
   };
   // A texel no pixel sees is left out (an identity row, x = 0): it cannot change the
   // render, and left in it would only add the membrane's smooth, nearly singular modes.
   std::vector<uint8_t> seen(n);
   uint32_t seen_count = 0;
   for (uint32_t t = 0; t < n; ++t) {
-    const int32_t *c00, *c10, *c01, *c11;
-    cells_of(t, &c00, &c10, &c01, &c11);
+    const auto [c00, c10, c01, c11] = corners(t);
     seen[t] = c00[0] + c10[4] + c01[7] + c11[9] != 0, seen_count += seen[t];
   }
   const float count = float(m.pixel.size());
@@ -239,8 +242,7 @@ std::vector<float> bake_tile(const TileMap& m, const float* reference, uint32_t*
       continue;
     }
     // The texel's row of K and R: the sums of its 4 cells' terms.
-    const int32_t *c00, *c10, *c01, *c11;
-    cells_of(t, &c00, &c10, &c01, &c11);
+    const auto [c00, c10, c01, c11] = corners(t);
     const int32_t k[9] = {c11[3],         c01[2] + c11[6],
                           c01[5],         c10[1] + c11[8],
                           c00[0] + c10[4] + c01[7] + c11[9],

@@ -42,12 +42,11 @@ struct PngLayout {
 };
 
 // The header, and the transforms that give OpenImageIO's texels: png_set_expand (palette
-// to RGB, tRNS to alpha, low-bit grey to 8 bits), 16-bit samples left big-endian. A side
-// over `max_side` stops before libpng sizes its row buffers, with the layout's width and
-// height set and nothing else.
-bool read_png_layout(png_structp png, png_infop info, uint32_t max_side, PngLayout* out) {
+// to RGB, tRNS to alpha, low-bit grey to 8 bits), 16-bit samples left big-endian. The
+// caller has checked the sides (IHDR is the first chunk: libpng refuses a file without it
+// there).
+bool read_png_layout(png_structp png, png_infop info, PngLayout* out) {
   if (setjmp(png_jmpbuf(png))) return false;
-  png_set_user_limits(png, PNG_UINT_31_MAX, PNG_UINT_31_MAX);  // judged against max_side, below
   // No ancillary chunk changes the texels (no gamma or colour conversion is applied), so
   // libpng skips them unread rather than allocating what they declare: its tEXt handler
   // allocated and zeroed a declared 1 GiB before finding the file 367 bytes long (the
@@ -57,7 +56,6 @@ bool read_png_layout(png_structp png, png_infop info, uint32_t max_side, PngLayo
   png_read_info(png, info);
   out->width = png_get_image_width(png, info);
   out->height = png_get_image_height(png, info);
-  if (out->width > max_side || out->height > max_side) return true;
   png_set_expand(png);
   png_set_interlace_handling(png);
   png_read_update_info(png, info);
@@ -86,7 +84,8 @@ struct PngReadStruct {
 
 Image decode_png(const uint8_t* bytes, size_t size, bool header_only, uint32_t max_side) {
   // The declared size first, from IHDR's bytes: a file cut after its header still says
-  // how large it claims to be (libpng reads on to the first IDAT before it tells).
+  // how large it claims to be (libpng reads on to the first IDAT before it tells), and
+  // libpng's row buffers are never sized for more.
   if (size >= 24 && std::memcmp(bytes + 12, "IHDR", 4) == 0) {
     auto be32 = [&](size_t at) {
       return uint32_t(bytes[at]) << 24 | uint32_t(bytes[at + 1]) << 16 | uint32_t(bytes[at + 2]) << 8 | bytes[at + 3];
@@ -102,8 +101,7 @@ Image decode_png(const uint8_t* bytes, size_t size, bool header_only, uint32_t m
   png_set_read_fn(rs.png, &src, read_png_bytes);
 
   PngLayout layout;
-  if (!read_png_layout(rs.png, rs.info, max_side, &layout)) throw DecodeError(src.error);
-  if (layout.width > max_side || layout.height > max_side) throw ImageTooLarge(layout.width, layout.height, max_side);
+  if (!read_png_layout(rs.png, rs.info, &layout)) throw DecodeError(src.error);
   if (layout.width == 0 || layout.height == 0 || layout.channels < 1 || layout.channels > 4 ||
       (layout.bit_depth != 8 && layout.bit_depth != 16) ||
       layout.row_bytes != size_t(layout.width) * size_t(layout.channels) * size_t(layout.bit_depth / 8))
