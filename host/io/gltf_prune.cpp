@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <set>
+#include <utility>
+#include <vector>
 #include <type_traits>
 
 namespace uvpress::io {
@@ -96,23 +98,85 @@ std::vector<bool> referenced_views(const tinygltf::Model& m, const std::vector<b
   return used;
 }
 
-// Drops from each buffer the bytes only removed views covered; kept bytes move in runs,
-// each run starting at its old offset modulo 4 (accessors stay aligned as they were).
-size_t compact_buffers(tinygltf::Model& m, const std::vector<bool>& keep_view) {
+// The bytes of its bufferView that accessor `a` reads, relative to the view: [first,
+// second); empty when it has no view or no elements. Matrix columns of 1- and 2-byte
+// components are padded to 4 bytes (glTF 2.0, 3.6.2.4).
+std::pair<size_t, size_t> accessor_span(const tinygltf::Model& m, const tinygltf::Accessor& a) {
+  if (a.bufferView < 0 || size_t(a.bufferView) >= m.bufferViews.size() || a.count == 0) return {0, 0};
+  const int component = tinygltf::GetComponentSizeInBytes(uint32_t(a.componentType));
+  const int components = tinygltf::GetNumComponentsInType(uint32_t(a.type));
+  if (component <= 0 || components <= 0) return {0, 0};
+  size_t element = size_t(component) * size_t(components);
+  const int columns = a.type == TINYGLTF_TYPE_MAT2 ? 2 : a.type == TINYGLTF_TYPE_MAT3 ? 3 : a.type == TINYGLTF_TYPE_MAT4 ? 4 : 0;
+  if (columns > 0) element = size_t(columns) * ((size_t(columns) * size_t(component) + 3) / 4 * 4);
+  const size_t stride = m.bufferViews[size_t(a.bufferView)].byteStride > 0 ? m.bufferViews[size_t(a.bufferView)].byteStride : element;
+  return {a.byteOffset, a.byteOffset + stride * (a.count - 1) + element};
+}
+
+// Per buffer, the bytes to drop: those only removed views covered, and inside a kept view
+// the ranges that only removed accessors read (a replaced TEXCOORD_0 in a view it shares
+// with other attributes, as Fox's does with JOINTS_0: 13.8 KB). Only views that nothing but
+// accessors use are cut (not an image's, nor a sparse accessor's index or value view), and
+// bytes no accessor read in the input stay: not ours to drop. `cut[v]`: view v loses bytes.
+std::vector<std::vector<uint8_t>> dropped_bytes(const tinygltf::Model& m, const std::vector<bool>& keep_view,
+                                                const std::vector<bool>& keep_accessor, std::vector<bool>& cut) {
+  std::vector<std::vector<uint8_t>> drop(m.buffers.size());
+  for (size_t b = 0; b < m.buffers.size(); ++b) drop[b].assign(m.buffers[b].data.size(), 0);
+  auto view_range = [&](const tinygltf::BufferView& view, std::vector<uint8_t>*& mask) -> std::pair<size_t, size_t> {
+    mask = view.buffer >= 0 && size_t(view.buffer) < drop.size() ? &drop[size_t(view.buffer)] : nullptr;
+    if (!mask || view.byteOffset > mask->size()) return {0, 0};
+    return {view.byteOffset, std::min(mask->size(), view.byteOffset + view.byteLength)};
+  };
+  for (const bool kept : {false, true})
+    for (size_t v = 0; v < m.bufferViews.size(); ++v) {
+      if (keep_view[v] != kept) continue;
+      std::vector<uint8_t>* mask;
+      const auto [a, e] = view_range(m.bufferViews[v], mask);
+      if (mask && a < e) std::fill(mask->begin() + long(a), mask->begin() + long(e), uint8_t(kept ? 0 : 1));
+    }
+  // Views used otherwise than as an accessor's elements are kept whole.
+  std::vector<bool> whole(m.bufferViews.size(), false);
+  auto mark_whole = [&](int v) {
+    if (v >= 0 && size_t(v) < whole.size()) whole[size_t(v)] = true;
+  };
+  for (const auto& image : m.images) mark_whole(image.bufferView);
+  for (const auto& a : m.accessors)
+    if (a.sparse.isSparse) mark_whole(a.sparse.indices.bufferView), mark_whole(a.sparse.values.bufferView);
+  cut.assign(m.bufferViews.size(), false);
+  std::vector<std::vector<std::pair<size_t, size_t>>> removed(m.bufferViews.size()), live(m.bufferViews.size());
+  for (size_t i = 0; i < m.accessors.size(); ++i) {
+    const int v = m.accessors[i].bufferView;
+    if (v < 0 || size_t(v) >= m.bufferViews.size()) continue;
+    const auto span = accessor_span(m, m.accessors[i]);
+    if (span.first < span.second) (keep_accessor[i] ? live : removed)[size_t(v)].push_back(span);
+  }
+  for (size_t v = 0; v < m.bufferViews.size(); ++v) {
+    if (!keep_view[v] || whole[v] || removed[v].empty() || live[v].empty()) continue;
+    std::vector<uint8_t>* mask;
+    const auto [a, e] = view_range(m.bufferViews[v], mask);
+    if (!mask || a >= e) continue;
+    std::vector<uint8_t> state(e - a, 0);  // 1: a removed accessor's, 2: a kept one's
+    for (const auto& [f, t] : removed[v])
+      for (size_t k = f; k < std::min(t, e - a); ++k) state[k] = std::max<uint8_t>(state[k], 1);
+    for (const auto& [f, t] : live[v])
+      for (size_t k = f; k < std::min(t, e - a); ++k) state[k] = 2;
+    for (size_t k = 0; k < state.size(); ++k)
+      if (state[k] == 1) (*mask)[a + k] = 1, cut[v] = true;
+  }
+  return drop;
+}
+
+// Drops the bytes `drop` marks from each buffer; kept bytes move in runs, each run starting
+// at its old offset modulo 4 (accessors stay aligned as they were). Views move with their
+// bytes; a view that lost bytes inside (cut) shrinks to its kept ones, and its accessors'
+// offsets follow them.
+size_t compact_buffers(tinygltf::Model& m, const std::vector<bool>& keep_view, const std::vector<bool>& keep_accessor) {
+  std::vector<bool> cut;
+  const std::vector<std::vector<uint8_t>> drops = dropped_bytes(m, keep_view, keep_accessor, cut);
   size_t removed = 0;
   for (size_t b = 0; b < m.buffers.size(); ++b) {
     auto& data = m.buffers[b].data;
-    std::vector<uint8_t> drop(data.size(), 0);
-    auto mark = [&](bool kept, uint8_t value) {
-      for (size_t v = 0; v < m.bufferViews.size(); ++v) {
-        const auto& view = m.bufferViews[v];
-        if (keep_view[v] != kept || view.buffer != int(b) || view.byteOffset > data.size()) continue;
-        const size_t end = std::min(data.size(), view.byteOffset + view.byteLength);
-        std::fill(drop.begin() + long(view.byteOffset), drop.begin() + long(end), value);
-      }
-    };
-    mark(false, 1);
-    mark(true, 0);
+    const std::vector<uint8_t>& drop = drops[b];
     if (std::find(drop.begin(), drop.end(), 1) == drop.end()) continue;
     struct Run {
       size_t from, to, at;  // old [from, to) now at `at`
@@ -134,14 +198,30 @@ size_t compact_buffers(tinygltf::Model& m, const std::vector<bool>& keep_view) {
       runs.push_back({i, j, at});
       i = j;
     }
+    // Where a kept byte went (`end`: also the position just past a run's last byte).
+    auto moved = [&](size_t old, bool end) -> size_t {
+      for (const Run& r : runs)
+        if (old >= r.from && (old < r.to || (end && old == r.to))) return old - r.from + r.at;
+      return old;
+    };
     for (size_t v = 0; v < m.bufferViews.size(); ++v) {
       auto& view = m.bufferViews[v];
       if (!keep_view[v] || view.buffer != int(b)) continue;
-      for (const Run& r : runs)
-        if (view.byteOffset >= r.from && view.byteOffset <= r.to) {
-          view.byteOffset = view.byteOffset - r.from + r.at;
-          break;
-        }
+      if (!cut[v]) {
+        view.byteOffset = moved(view.byteOffset, true);
+        continue;
+      }
+      // The view's first and last kept bytes (a kept accessor reads some: dropped_bytes).
+      const size_t from = view.byteOffset, to = std::min(data.size(), view.byteOffset + view.byteLength);
+      size_t first = from, last = to;
+      while (first < to && drop[first]) ++first;
+      while (last > first && drop[last - 1]) --last;
+      const size_t start = moved(first, false), end = moved(last - 1, false) + 1;
+      for (size_t i = 0; i < m.accessors.size(); ++i)
+        if (keep_accessor[i] && m.accessors[i].bufferView == int(v))
+          m.accessors[i].byteOffset = moved(from + m.accessors[i].byteOffset, true) - start;
+      view.byteOffset = start;
+      view.byteLength = end - start;
     }
     removed += data.size() > out.size() ? data.size() - out.size() : 0;
     data = std::move(out);
@@ -210,7 +290,7 @@ PruneResult prune_replaced(GltfFile& file, const tinygltf::Model& input) {
   result.buffer_views = size_t(std::count(keep_view.begin(), keep_view.end(), false));
   if (result.accessors == 0 && result.buffer_views == 0) return result;
 
-  result.buffer_bytes = compact_buffers(m, keep_view);
+  result.buffer_bytes = compact_buffers(m, keep_view, keep_accessor);
   const std::vector<int> accessor_to = renumbering(keep_accessor), view_to = renumbering(keep_view);
   for_each_view_ref(m, keep_accessor, [&](int& v) {
     if (v >= 0 && size_t(v) < view_to.size()) v = view_to[size_t(v)];

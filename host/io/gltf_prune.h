@@ -7,7 +7,9 @@
 // `input` (or it is new since `input`): objects the input itself left unused are kept,
 // they are not ours to drop. Accessors and bufferViews are pruned (reparam never leaves an
 // image, texture or sampler unreferenced: it re-encodes images in place), the buffers are
-// compacted over the bytes of the removed bufferViews, and every reference is renumbered.
+// compacted over the bytes of the removed bufferViews and over the bytes that only removed
+// accessors read inside a bufferView that stays (Fox keeps TEXCOORD_0 and JOINTS_0 in one
+// view), and every reference is renumbered.
 #pragma once
 
 #include "io/gltf_io.h"
@@ -18,7 +20,7 @@ namespace uvpress::io {
 
 struct PruneResult {
   size_t accessors = 0, buffer_views = 0;  // removed
-  size_t buffer_bytes = 0;                 // removed from the buffers
+  size_t buffer_bytes = 0;                 // removed from the buffers (whole views and parts of shared ones)
   // Why nothing was pruned, when an extension the file uses may reference accessors or
   // bufferViews in ways this pass does not know (renumbering would break it). "" otherwise.
   std::string skipped;
