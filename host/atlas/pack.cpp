@@ -488,6 +488,7 @@ Packing place(const Prints& P, uint32_t width, uint32_t height, const PackOption
   double footprint_cells = 0;
   for (const Footprint& f : P.prints) footprint_cells += f.count;
   out.gutter_texels = (double(blocked.count()) - footprint_cells) * b * b;
+  out.footprint_texels = footprint_cells * b * b;
   out.efficiency = out.covered / (double(width) * height);
   return out;
 }

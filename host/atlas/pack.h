@@ -91,6 +91,9 @@ struct Packing {
   double covered = 0;        // atlas texels whose centre a chart covers (overlapping charts count once)
   double efficiency = 0;     // covered / (width * height): the share of the image under charts
   double gutter_texels = 0;  // texels kept empty for gutters (around footprints and along the edges)
+  // Texels of the charts' footprints (every texel a triangle overlaps: covered texels and the
+  // rims that bilinear taps read). Image = footprints + gutters + what the packer left free.
+  double footprint_texels = 0;
 
   // Chart point (input units) -> atlas texel coordinates.
   std::array<double, 2> map(size_t chart, double x, double y) const;

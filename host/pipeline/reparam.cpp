@@ -943,6 +943,7 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
     lr.gutter = gutter;
     lr.edge_gutter = {budget.pack.edge_x, budget.pack.edge_y};
     lr.gutter_texels = packing.gutter_texels;
+    lr.footprint_texels = packing.footprint_texels;
     lr.chart_cost_ratio = choice.cost_ratio;
     lr.flips = layout_flips;
     lr.overlaps_new = overlaps_new;

@@ -214,6 +214,7 @@ struct LayoutReport {
   uint32_t side_multiple = 1;     // ... and the atlas's sides multiples of this
   std::array<uint32_t, 2> edge_gutter{};  // texels at the left/right and top/bottom edges
   double gutter_texels = 0;       // texels kept empty around charts and at the edges
+  double footprint_texels = 0;    // texels under the charts' footprints (covered ones and their rims: atlas::Packing)
   double chart_cost_ratio = 0;    // eq. 21: texels under the charts / the input's
   size_t flips = 0;
   size_t overlaps_new = 0;             // triangle pairs; 0, or the layout is not written

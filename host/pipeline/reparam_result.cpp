@@ -73,6 +73,7 @@ json layout_json(const LayoutReport& l) {
   if (l.mip_align > 1) j["mip_align"] = l.mip_align, j["side_multiple"] = l.side_multiple;
   j["edge_gutter"] = l.edge_gutter;
   j["gutter_texels"] = l.gutter_texels;
+  j["footprint_texels"] = l.footprint_texels;
   j["chart_cost_ratio"] = l.chart_cost_ratio;
   j["flips"] = l.flips;
   j["overlaps_new"] = l.overlaps_new;

@@ -11,6 +11,7 @@
 #include "pipeline/demo_asset.h"
 #include "pipeline/reparam.h"
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 
@@ -75,6 +76,8 @@ void add_bench_pack(CLI::App& bench, Globals& g) {
                                            {"atlas", l.atlas},
                                            {"gutter", l.gutter},
                                            {"gutter_share", l.gutter_texels / image},
+                                           {"footprint_share", l.footprint_texels / image},
+                                           {"free_share", std::max(0.0, 1.0 - (l.footprint_texels + l.gutter_texels) / image)},
                                            {"chart_cost_ratio", l.chart_cost_ratio},
                                            {"units", l.packing_units},
                                            {"seconds", l.pack_seconds}};
