@@ -1236,6 +1236,8 @@ Shading AsWrittenScorer::shading() const { return state_->setup.lit ? Shading::L
 
 const std::string& AsWrittenScorer::shading_warning() const { return state_->setup.shading_warning; }
 
+int AsWrittenScorer::driving_image() const { return state_->setup.ref.image; }
+
 Scored score_as_written(const io::GltfFile& reference, const io::GltfFile& candidate, engine::Engine& engine,
                         const EvalOptions& o) {
   return AsWrittenScorer(reference, engine, o).score(candidate);

@@ -111,6 +111,9 @@ class AsWrittenScorer {
   const ViewResolution& resolution() const;
   Shading shading() const;                    // Unlit or Lit: what `auto` resolved to
   const std::string& shading_warning() const;  // why auto fell back to unlit ("" otherwise)
+  // The glTF image the views render (the reference's driving texture, extract_layout): only
+  // the primitives that sample it are scored, so a change to another image's layout is not seen.
+  int driving_image() const;
 
  private:
   struct State;

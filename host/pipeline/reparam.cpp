@@ -1520,13 +1520,28 @@ void guard_against_resize(Run& run) {
   const double q_resize = score(run, resized, "the plain resize").q;
   Guard& guard = run.result.guard;
   guard.ran = true, guard.q_reparam = chosen.q, guard.q_resize = q_resize;
-  // A layout that was not scored (q < 0) never wins against one that was.
-  if (!(chosen.q >= 0 && chosen.q < q_resize)) {
+  // The views see one image's primitives: when reparam re-baked a different one, both q
+  // measure the same untouched texture.
+  const int seen = run.scorer->driving_image();
+  bool seen_rebaked = false;
+  for (const auto& t : chosen.textures) seen_rebaked |= t.image == seen;
+  if (!seen_rebaked) {
+    std::string why;
+    for (const auto& l : chosen.layouts)
+      if (l.untouched && std::find(l.images.begin(), l.images.end(), seen) != l.images.end()) why = *l.untouched;
+    guard.unmeasured = "the scoring views render only the primitives that sample image " + std::to_string(seen) +
+                       ", which reparam left as it was" + (why.empty() ? std::string() : " (" + why + ")") +
+                       ": the q of reparam's layouts and of the resize measure that image alone";
+  }
+  // A layout that was not scored (q < 0), or not seen, never wins against one that was.
+  if (!(chosen.q >= 0 && chosen.q < q_resize && guard.unmeasured.empty())) {
     chosen_by = "resize";
     file = std::move(resized);
     for (auto& t : chosen.textures) t.new_bytes = file.image_bytes[size_t(t.image)].size();
-    warnings.push_back("the plain resize to the same texels looks better (q " + std::to_string(q_resize) + " vs " +
-                       std::to_string(chosen.q) + "): wrote the resize");
+    const std::string q = "(q " + std::to_string(q_resize) + " vs " + std::to_string(chosen.q) + ")";
+    warnings.push_back(!guard.unmeasured.empty() ? guard.unmeasured + ": wrote the resize"
+                       : q_resize == chosen.q ? "the plain resize to the same texels ties with reparam's layout " + q + ": wrote the resize"
+                                              : "the plain resize to the same texels looks better " + q + ": wrote the resize");
   }
   guard.chosen = chosen_by;
 }

@@ -155,9 +155,11 @@ json ReparamResult::to_json() const {
                                                  {"pack", c.seconds_pack},
                                                  {"rebake", c.seconds_bake},
                                                  {"score", c.seconds_score}}}});
-  if (guard.ran)
+  if (guard.ran) {
     report["guard"] = {{"q_reparam", guard.q_reparam}, {"q_resize", guard.q_resize}, {"resize", "lanczos3-srgb"},
                        {"chosen", guard.chosen}};
+    if (!guard.unmeasured.empty()) report["guard"]["unmeasured"] = guard.unmeasured;
+  }
   else if (!guard.skipped.empty())
     report["guard"] = {{"skipped", guard.skipped}};
   else

@@ -188,6 +188,30 @@ TEST_CASE("reparam keeps shared assets valid and leaves tiled and transformed la
   }
 }
 
+TEST_CASE("reparam's guard says when its views cannot see the layouts it changed", "[pipeline][reparam][shared]") {
+  // TextureTransformTest: the views render the primitives of its most-sampled base colour,
+  // 'UV.png', which is sampled through KHR_texture_transform and so left as it was; reparam
+  // re-lays the three marker images. Both q then measure 'UV.png' alone (0 and 0): the
+  // guard must say so and write the resize, not call it "better".
+  if (!test::shared_dir()) UVPRESS_SKIP("../shared is absent");
+  auto engine = engine::make_cpu_engine({});
+  pipeline::ReparamOptions o;
+  o.cost = 0.5, o.score_resolution = 512, o.triangle.evaluations = 12;
+  io::GltfFile out = io::load_gltf((*test::shared_dir() / "assets/TextureTransformTest/glTF/TextureTransformTest.gltf").string());
+  const pipeline::ReparamResult r = pipeline::reparam(out, *engine, o);
+  REQUIRE(r.guard.ran);
+  CHECK(r.guard.unmeasured.find("'UV.png'") != std::string::npos);
+  CHECK(r.chosen == "resize");
+  CHECK(r.to_json()["guard"]["unmeasured"] == r.guard.unmeasured);
+  // A layout the views do render: nothing unmeasured (the demo, one re-baked texture).
+  io::GltfFile demo = pipeline::make_demo_asset({16, 128});
+  o.triangle.view_size = 16;
+  const pipeline::ReparamResult d = pipeline::reparam(demo, *engine, o);
+  REQUIRE(d.guard.ran);
+  CHECK(d.guard.unmeasured.empty());
+  CHECK(d.to_json()["guard"].count("unmeasured") == 0);
+}
+
 TEST_CASE("reparam --max-gmsd: the cheapest size that meets the bound, tighter bounds cost more", "[pipeline][reparam]") {
   auto engine = engine::make_cpu_engine({});
   const io::GltfFile in = pipeline::make_demo_asset({16, 256});

@@ -144,6 +144,10 @@ void add_reparam(CLI::App& app, Globals& g) {
         if (r.chosen == "reparam")
           std::snprintf(text, sizeof text, "; on screen q %.3g vs %.3g for a plain resize to the same texels (%s layout kept)",
                         r.guard.q_reparam, r.guard.q_resize, r.layout.c_str());
+        else if (!r.guard.unmeasured.empty())
+          std::snprintf(text, sizeof text, "; wrote a plain resize: the scoring views do not see the re-parameterized layouts (see the warnings)");
+        else if (r.guard.q_resize == r.guard.q_reparam)
+          std::snprintf(text, sizeof text, "; wrote a plain resize: it ties with reparam's layout on screen (q %.3g both)", r.guard.q_resize);
         else
           std::snprintf(text, sizeof text, "; wrote a plain resize: it looks better (q %.3g) than reparam's layout (q %.3g)",
                         r.guard.q_resize, r.guard.q_reparam);
