@@ -1525,6 +1525,19 @@ void guard_against_resize(Run& run) {
   const int seen = run.scorer->driving_image();
   bool seen_rebaked = false;
   for (const auto& t : chosen.textures) seen_rebaked |= t.image == seen;
+  // ... and only the maps that share its layout (lit shading); a re-baked image of another
+  // layout changes unseen.
+  std::vector<int> rendered;
+  for (const auto& l : chosen.layouts)
+    if (std::find(l.images.begin(), l.images.end(), seen) != l.images.end()) rendered.insert(rendered.end(), l.images.begin(), l.images.end());
+  for (const auto& t : chosen.textures)
+    if (std::find(rendered.begin(), rendered.end(), t.image) == rendered.end()) guard.unseen.push_back(t.name);
+  if (!guard.unseen.empty() && seen_rebaked) {
+    std::string names;
+    for (const auto& n : guard.unseen) names += (names.empty() ? "'" : ", '") + n + "'";
+    warnings.push_back("the scoring views render only the layout of image " + std::to_string(seen) +
+                       "; q does not see the re-baked " + names + " (neither reparam's nor the resize's)");
+  }
   if (!seen_rebaked) {
     std::string why;
     for (const auto& l : chosen.layouts)

@@ -116,6 +116,9 @@ struct Guard {
   // untouched (TextureTransformTest: 'UV.png' is sampled through KHR_texture_transform;
   // both q are 0). The resize is written then: reparam's layouts cannot be shown better.
   std::string unmeasured;
+  // Re-baked images that the scoring views do not render (their layout is not the driving
+  // image's: MultiUVTest's emissive map on TEXCOORD_1), by name: neither q sees them.
+  std::vector<std::string> unseen;
 };
 
 // --max-gmsd (report: max_gmsd): the cheapest point of the layout's curve that meets the bound.

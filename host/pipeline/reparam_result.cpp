@@ -159,6 +159,7 @@ json ReparamResult::to_json() const {
     report["guard"] = {{"q_reparam", guard.q_reparam}, {"q_resize", guard.q_resize}, {"resize", "lanczos3-srgb"},
                        {"chosen", guard.chosen}};
     if (!guard.unmeasured.empty()) report["guard"]["unmeasured"] = guard.unmeasured;
+    if (!guard.unseen.empty()) report["guard"]["unseen"] = guard.unseen;
   }
   else if (!guard.skipped.empty())
     report["guard"] = {{"skipped", guard.skipped}};

@@ -203,12 +203,23 @@ TEST_CASE("reparam's guard says when its views cannot see the layouts it changed
   CHECK(r.guard.unmeasured.find("'UV.png'") != std::string::npos);
   CHECK(r.chosen == "resize");
   CHECK(r.to_json()["guard"]["unmeasured"] == r.guard.unmeasured);
+  CHECK(r.guard.unseen == std::vector<std::string>{"Correct.png", "NotSupported.png", "Error.png"});
+  // MultiUVTest: the views render its base colour's layout (TEXCOORD_0); its emissive map
+  // on TEXCOORD_1 is re-laid too, and q cannot see it: the report names it.
+  io::GltfFile multi = io::load_gltf((*test::shared_dir() / "assets/MultiUVTest/glTF/MultiUVTest.gltf").string());
+  pipeline::ReparamOptions paper = o;
+  paper.candidates = false;  // the paper's layout alone: the guard is what is checked
+  const pipeline::ReparamResult m = pipeline::reparam(multi, *engine, paper);
+  REQUIRE(m.guard.ran);
+  CHECK(m.guard.unmeasured.empty());
+  CHECK(m.guard.unseen == std::vector<std::string>{"uv1.png"});
   // A layout the views do render: nothing unmeasured (the demo, one re-baked texture).
   io::GltfFile demo = pipeline::make_demo_asset({16, 128});
   o.triangle.view_size = 16;
   const pipeline::ReparamResult d = pipeline::reparam(demo, *engine, o);
   REQUIRE(d.guard.ran);
   CHECK(d.guard.unmeasured.empty());
+  CHECK(d.guard.unseen.empty());
   CHECK(d.to_json()["guard"].count("unmeasured") == 0);
 }
 
