@@ -109,7 +109,11 @@ EncodeSettings encode_settings_of(const std::vector<uint8_t>& bytes) {
   const std::string format = sniff_image_format(bytes.data(), bytes.size());
   if (format == "png") {
     // IHDR's colour type (byte 25 of the file): 3 is indexed colour.
-    s.palette = bytes.size() >= 26 && std::memcmp(&bytes[12], "IHDR", 4) == 0 && bytes[25] == 3;
+    const bool header = bytes.size() >= 26 && std::memcmp(&bytes[12], "IHDR", 4) == 0;
+    s.palette = header && bytes[25] == 3;
+    // 8-bit RGB or RGBA: a palette where it loses (almost) nothing (PngOptions). Grey keeps
+    // its one byte a texel.
+    s.palette_when_faithful = header && (bytes[25] == 2 || bytes[25] == 6) && bytes[24] == 8;
   } else if (format == "jpeg") {
     const JpegHeader h = read_jpeg_header(bytes.data(), bytes.size());
     s.format = "jpeg";
@@ -124,7 +128,7 @@ EncodeSettings encode_settings_of(const std::vector<uint8_t>& bytes) {
 }
 
 std::string describe(const EncodeSettings& s) {
-  if (s.format == "png") return s.palette ? "png (8-bit palette)" : "png";
+  if (s.format == "png") return s.palette ? "png (8-bit palette)" : s.palette_when_faithful ? "png (8-bit palette where faithful)" : "png";
   const char* sub = s.jpeg_h_sampling == 2 && s.jpeg_v_sampling == 2   ? "4:2:0"
                     : s.jpeg_h_sampling == 2 && s.jpeg_v_sampling == 1 ? "4:2:2"
                     : s.jpeg_h_sampling == 1 && s.jpeg_v_sampling == 1 ? "4:4:4"
@@ -139,6 +143,7 @@ std::vector<uint8_t> encode_image(const Image& image, const EncodeSettings& sett
   if (settings.format == "png") {
     PngOptions o;
     o.palette = settings.palette;
+    o.palette_when_faithful = settings.palette_when_faithful;
     o.draft = settings.draft;
     return encode_png(image, o);
   }

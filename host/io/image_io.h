@@ -38,6 +38,7 @@ Image decode_image(const std::vector<uint8_t>& bytes, const std::string& name);
 struct EncodeSettings {
   std::string format = "png";  // "png" | "jpeg"
   bool palette = false;        // PNG: an 8-bit palette (the input was paletted)
+  bool palette_when_faithful = false;  // PNG: a palette where it is near-lossless (PngOptions; 8-bit truecolour inputs)
   int jpeg_quality = 95;       // JPEG: IJG quality, estimated from the input's tables
   int jpeg_h_sampling = 2, jpeg_v_sampling = 2;  // JPEG: luma sampling factors (2, 2: 4:2:0)
   bool progressive = false;    // JPEG: progressive when the input was

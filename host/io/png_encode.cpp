@@ -24,6 +24,7 @@ struct Rows {
   std::vector<uint8_t> data;
   std::vector<png_color> palette;
   std::vector<png_byte> alpha;  // tRNS: alpha of the first palette entries
+  double rms = 0;               // palette: RMS error against the image's 8-bit samples, in 8-bit levels
 };
 
 struct Sink {
@@ -110,6 +111,15 @@ Rows palette_rows(const Image& img, bool keep_alpha, float dithering) {
   r.bytes_per_row = img.width;  // one index a byte; png_set_packing packs lower depths
   r.data.resize(n);
   for (size_t i = 0; i < n; ++i) r.data[i] = slot[q.indices[i]];
+  // Over the samples written (grey images compare their one channel, opaque ones no alpha).
+  const int count = img.channels <= 2 ? 1 : 3;
+  double sum = 0;
+  for (size_t i = 0; i < n; ++i) {
+    const auto& e = q.palette[q.indices[i]];
+    for (int c = 0; c < count; ++c) sum += (double(e[size_t(c)]) - rgba[4 * i + size_t(c)]) * (double(e[size_t(c)]) - rgba[4 * i + size_t(c)]);
+    if (keep_alpha) sum += (double(e[3]) - rgba[4 * i + 3]) * (double(e[3]) - rgba[4 * i + 3]);
+  }
+  r.rms = std::sqrt(sum / (double(n) * (count + (keep_alpha ? 1 : 0))));
   return r;
 }
 
@@ -145,8 +155,9 @@ std::vector<uint8_t> encode_png(const Image& image, const PngOptions& options) {
       image.pixels.size() != size_t(image.width) * image.height * image.channels)
     throw std::invalid_argument("encode_png: inconsistent image");
   const bool keep_alpha = !opaque(image);
-  const bool palette = options.palette && image.bits != 16;
-  const Rows rows = palette ? palette_rows(image, keep_alpha, options.dithering) : direct_rows(image, keep_alpha);
+  const bool palette = (options.palette || options.palette_when_faithful) && image.bits != 16;
+  Rows rows = palette ? palette_rows(image, keep_alpha, options.palette ? options.dithering : 0.0f) : direct_rows(image, keep_alpha);
+  if (!options.palette && palette && rows.rms > kFaithfulPaletteRms) rows = direct_rows(image, keep_alpha);
   // libpng's adaptive choice per row (minimum sum of absolute differences) is a heuristic:
   // on smooth colour it wins, on palettes and flat areas no filter often does. Try both,
   // and Paeth alone, and keep the smallest.

@@ -1,4 +1,5 @@
-// The tight encoders (issue 18): PNG palettes for paletted inputs, no alpha channel when
+// The tight encoders (issue 18): PNG palettes for paletted inputs (and for truecolour ones
+// where the palette is faithful), no alpha channel when
 // every texel is opaque, PNG at least as small as OpenImageIO's default writer, and the
 // JPEG settings of an input (quality from its quantization tables, subsampling,
 // progressive) read back from files written by another encoder.
@@ -94,6 +95,87 @@ TEST_CASE("PNG palette: a paletted input's re-encode is an 8-bit palette close t
   REQUIRE(back4.channels == 4);
   CHECK(std::abs(back4.at(10, 10, 3) - 0.5f) < 0.02f);
   CHECK(back4.at(10, 50, 3) == 1.0f);
+}
+
+namespace {
+
+// Flat art: `cells` flat colours in Voronoi cells, each texel the mean of 4x4 samples, so
+// the cells' borders are anti-aliased blends (several hundred colours in all, most texels
+// one of the flat ones), as a re-baked cartoon texture is.
+Image flat_art(uint32_t w, uint32_t h, int cells) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  std::vector<std::array<float, 5>> seeds;  // x, y, r, g, b
+  for (int k = 0; k < cells; ++k) seeds.push_back({u(rng) * float(w), u(rng) * float(h), u(rng), u(rng), u(rng)});
+  Image img;
+  img.width = w, img.height = h, img.channels = 3;
+  img.pixels.assign(size_t(w) * h * 3, 0.0f);
+  for (uint32_t y = 0; y < h; ++y)
+    for (uint32_t x = 0; x < w; ++x)
+      for (int sy = 0; sy < 4; ++sy)
+        for (int sx = 0; sx < 4; ++sx) {
+          const float px = float(x) + (float(sx) + 0.5f) / 4, py = float(y) + (float(sy) + 0.5f) / 4;
+          size_t best = 0;
+          for (size_t k = 1; k < seeds.size(); ++k)
+            if (std::hypot(px - seeds[k][0], py - seeds[k][1]) < std::hypot(px - seeds[best][0], py - seeds[best][1])) best = k;
+          for (int c = 0; c < 3; ++c) img.at(x, y, uint32_t(c)) += seeds[best][2 + size_t(c)] / 16;
+        }
+  for (float& v : img.pixels) v = std::round(v * 255.0f) / 255.0f;  // 8-bit values, as decoded
+  return img;
+}
+
+// RMS difference in 8-bit levels over the colour channels.
+double rms_levels(const Image& a, const Image& b) {
+  double sum = 0;
+  for (uint32_t y = 0; y < a.height; ++y)
+    for (uint32_t x = 0; x < a.width; ++x)
+      for (uint32_t c = 0; c < 3; ++c) sum += std::pow(255.0 * (a.at(x, y, c) - b.at(x, y, c)), 2);
+  return std::sqrt(sum / (double(a.width) * a.height * 3));
+}
+
+}  // namespace
+
+TEST_CASE("PNG palette where faithful: flat art becomes a palette within half a level, smooth colour stays as it is",
+          "[io][encode]") {
+  io::EncodeSettings faithful;
+  faithful.palette_when_faithful = true;
+  // Flat art with anti-aliased borders: more than 256 colours, a palette all the same.
+  const Image art = flat_art(256, 192, 12);
+  std::set<std::array<float, 3>> colours;
+  for (uint32_t y = 0; y < art.height; ++y)
+    for (uint32_t x = 0; x < art.width; ++x) colours.insert({art.at(x, y, 0), art.at(x, y, 1), art.at(x, y, 2)});
+  REQUIRE(colours.size() > 256);
+  const auto art_png = io::encode_image(art, faithful), art_rgb = io::encode_image(art, "png");
+  CHECK(png_color_type(art_png) == 3);
+  CHECK(art_png.size() < art_rgb.size());
+  const double art_rms = rms_levels(art, io::decode_image(art_png, "art"));
+  INFO("flat art: " << colours.size() << " colours, palette RMS " << art_rms << " levels, " << art_png.size() << " vs "
+                    << art_rgb.size() << " bytes as RGB");
+  CHECK(art_rms <= io::kFaithfulPaletteRms);
+  CHECK(art_rms > 0);  // lossy, within the bound
+  // At most 256 colours: the palette is exact.
+  Image few = art;
+  for (float& v : few.pixels) v = std::round(v * 5.0f) / 5.0f;  // 6 levels a channel: 216 colours
+  const auto few_png = io::encode_image(few, faithful);
+  CHECK(png_color_type(few_png) == 3);
+  CHECK(rms_levels(few, io::decode_image(few_png, "few")) < 1e-3);  // texel for texel (float rounding aside)
+  // Smooth colour would lose more than half a level: written as it is, texel for texel.
+  Image smooth = smooth_image(96, 80, 3);
+  for (float& v : smooth.pixels) v = std::round(v * 255.0f) / 255.0f;
+  const auto smooth_png = io::encode_image(smooth, faithful);
+  CHECK(png_color_type(smooth_png) == 2);
+  CHECK(rms_levels(smooth, io::decode_image(smooth_png, "smooth")) < 1e-3);
+  // Which inputs ask for it: 8-bit RGB and RGBA PNGs; not palettes (a palette always),
+  // grey, 16-bit or JPEG.
+  CHECK(io::encode_settings_of(art_rgb).palette_when_faithful);
+  CHECK_FALSE(io::encode_settings_of(art_png).palette_when_faithful);
+  CHECK(io::encode_settings_of(art_png).palette);
+  Image grey = smooth_image(32, 32, 1);
+  CHECK_FALSE(io::encode_settings_of(io::encode_image(grey, "png")).palette_when_faithful);
+  Image deep = smooth_image(32, 32, 3);
+  deep.bits = 16;
+  CHECK_FALSE(io::encode_settings_of(io::encode_image(deep, "png")).palette_when_faithful);
+  CHECK_FALSE(io::encode_settings_of(io::encode_image(smooth, "jpeg")).palette_when_faithful);
 }
 
 TEST_CASE("PNG opaque alpha: an alpha channel whose every texel is opaque is not written", "[io][encode]") {
