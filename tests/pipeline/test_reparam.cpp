@@ -5,6 +5,7 @@
 #include "engine.h"
 #include "eval/eval.h"
 #include "io/asset.h"
+#include "io/asset_bytes.h"
 #include "io/gltf_append.h"
 #include "io/gltf_io.h"
 #include "io/image_io.h"
@@ -164,6 +165,9 @@ TEST_CASE("reparam keeps shared assets valid and leaves tiled and transformed la
     auto before = test::validate_gltf(path), after = test::validate_gltf(target);
     for (auto& [code, count] : after["errors"].items()) CHECK(count.get<int>() <= before["errors"].value(code, 0));
     CHECK(after["numErrors"].get<int>() <= before["numErrors"].get<int>());
+    CHECK(after["codes"].value("UNUSED_OBJECT", 0) <= before["codes"].value("UNUSED_OBJECT", 0));
+    // Never heavier than the input (Fox: its replaced UVs leave the bufferView they shared).
+    CHECK(io::asset_bytes(target.string()).total() <= io::asset_bytes(path.string()).total());
     io::Asset a = io::build_asset(in), b = io::build_asset(out);
     const std::string name = rel;
     if (name.rfind("BoxTextured", 0) == 0 || name.rfind("TextureTransformTest", 0) == 0) {
