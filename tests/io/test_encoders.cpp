@@ -153,6 +153,21 @@ TEST_CASE("PNG palette where faithful: flat art becomes a palette within half a 
                     << art_rgb.size() << " bytes as RGB");
   CHECK(art_rms <= io::kFaithfulPaletteRms);
   CHECK(art_rms > 0);  // lossy, within the bound
+  // Translucent flat art: its alpha goes through the palette's tRNS entries, within the bound.
+  Image art4;
+  art4.width = art.width, art4.height = art.height, art4.channels = 4;
+  for (uint32_t y = 0; y < art.height; ++y)
+    for (uint32_t x = 0; x < art.width; ++x) {
+      for (uint32_t c = 0; c < 3; ++c) art4.pixels.push_back(art.at(x, y, c));
+      art4.pixels.push_back(x < art.width / 2 ? 1.0f : 128.0f / 255.0f);
+    }
+  const auto art4_png = io::encode_image(art4, faithful);
+  CHECK(png_color_type(art4_png) == 3);
+  CHECK(has_chunk(art4_png, "tRNS"));
+  const Image back4 = io::decode_image(art4_png, "art4");
+  REQUIRE(back4.channels == 4);
+  CHECK(std::abs(back4.at(art.width - 1, 5, 3) - 128.0f / 255.0f) < 1.5f / 255.0f);
+  CHECK(back4.at(0, 5, 3) == 1.0f);
   // At most 256 colours: the palette is exact.
   Image few = art;
   for (float& v : few.pixels) v = std::round(v * 5.0f) / 5.0f;  // 6 levels a channel: 216 colours
