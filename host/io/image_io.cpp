@@ -136,6 +136,12 @@ std::string describe(const EncodeSettings& s) {
   return "jpeg (quality " + std::to_string(s.jpeg_quality) + ", " + sub + (s.progressive ? ", progressive)" : ")");
 }
 
+std::string describe_encoded(const std::vector<uint8_t>& bytes) {
+  EncodeSettings s = encode_settings_of(bytes);
+  s.palette_when_faithful = false;  // a choice for re-encoding, not a property of these bytes
+  return describe(s);
+}
+
 std::vector<uint8_t> encode_image(const Image& image, const EncodeSettings& settings) {
   if (image.width == 0 || image.height == 0 || image.channels == 0 || image.channels > 4 ||
       image.pixels.size() != size_t(image.width) * image.height * image.channels)

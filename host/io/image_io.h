@@ -50,6 +50,8 @@ struct EncodeSettings {
 EncodeSettings encode_settings_of(const std::vector<uint8_t>& bytes);
 // In words, for reports: "png (8-bit palette)", "jpeg (quality 87, 4:2:0, progressive)".
 std::string describe(const EncodeSettings& settings);
+// What `bytes` are, in the same words: "png (8-bit palette)", "png", "jpeg (quality 87, 4:2:0)".
+std::string describe_encoded(const std::vector<uint8_t>& bytes);
 
 // PNG: 8 or 16 bit as image.bits says, zlib at its strongest, the smallest of a few row
 // filter choices, no alpha channel when every texel is opaque, quantized to a palette when

@@ -1635,6 +1635,7 @@ void count_texture_costs(Run& run) {
     t.new_size = {ha.width, ha.height};  // the resize's when the guard wrote it
     t.new_bytes = after.size();
     t.encoding = io::describe(settings);
+    t.written = io::describe_encoded(after);
     t.old_cost = cb, t.new_cost = ca;
     t.resize_bytes = resize;
     t.bytes_ratio = double(after.size()) / double(std::max<size_t>(1, before.size()));

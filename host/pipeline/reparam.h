@@ -245,6 +245,7 @@ struct TextureReport {
   uint64_t old_bytes = 0, new_bytes = 0;           // encoded
   // Set by reparam's texture costs, in every report.
   std::string encoding;  // io::describe of the input's encode settings
+  std::string written;   // what the new bytes are (io::describe_encoded): a palette where it was faithful
   TextureCost old_cost, new_cost;  // report: old, new (with old_bytes, new_bytes)
   uint64_t resize_bytes = 0;       // the input Lanczos-3-resized to new_size, encoded the same way
   double bytes_ratio = 0;          // new_bytes / old_bytes

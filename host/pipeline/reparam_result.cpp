@@ -95,6 +95,7 @@ json texture_json(const TextureReport& t) {
           {"old_bytes", t.old_bytes},
           {"new_bytes", t.new_bytes},
           {"encoding", t.encoding},
+          {"written", t.written},
           {"old", cost_json(t.old_cost, t.old_bytes)},
           {"new", cost_json(t.new_cost, t.new_bytes)},
           {"resize_bytes", t.resize_bytes},

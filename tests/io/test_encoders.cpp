@@ -185,6 +185,9 @@ TEST_CASE("PNG palette where faithful: flat art becomes a palette within half a 
   CHECK(io::encode_settings_of(art_rgb).palette_when_faithful);
   CHECK_FALSE(io::encode_settings_of(art_png).palette_when_faithful);
   CHECK(io::encode_settings_of(art_png).palette);
+  CHECK(io::describe_encoded(art_png) == "png (8-bit palette)");
+  CHECK(io::describe_encoded(art_rgb) == "png");
+  CHECK(io::describe(io::encode_settings_of(art_rgb)) == "png (8-bit palette where faithful)");
   Image grey = smooth_image(32, 32, 1);
   CHECK_FALSE(io::encode_settings_of(io::encode_image(grey, "png")).palette_when_faithful);
   Image deep = smooth_image(32, 32, 3);
