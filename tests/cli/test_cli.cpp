@@ -288,6 +288,26 @@ TEST_CASE("CLI: reparam's summary counts every image, says when nothing was re-p
   CHECK_THAT(r.out, Catch::Contains("4096 texels) -> "));
 }
 
+TEST_CASE("CLI: reparam of Fox at its defaults comes out lighter than it went in, its flat art as a palette",
+          "[cli][reparam][shared]") {
+  // Issue 18: Fox's output was 226.5 KB against the input's 191.8 KB (13.8 KB of dead UVs
+  // in a shared bufferView, and its re-baked flat art written as RGB: 72 KB).
+  auto shared = test::shared_dir();
+  if (!shared) UVPRESS_SKIP("../shared is absent");
+  test::Scratch dir("cli-reparam-fox-bytes");
+  const fs::path fox = *shared / "assets/Fox/glTF/Fox.gltf";
+  auto r = run_uvpress("reparam " + quoted(fox) + " -o " + quoted(dir / "Fox.gltf") + " --report " + quoted(dir / "r.json"));
+  INFO(r.out << r.err);
+  REQUIRE(r.exit_code == 0);
+  const auto report = nlohmann::json::parse(std::ifstream(dir / "r.json"));
+  INFO(report["input_bytes"] << " -> " << report["output_bytes"]);
+  CHECK(report["output_bytes"].get<uint64_t>() < report["input_bytes"].get<uint64_t>());
+  CHECK(report["output_files"]["buffers"] == report["input_files"]["buffers"]);  // the same .bin size
+  REQUIRE(report["textures"].size() == 1);
+  CHECK(report["textures"][0]["written"] == "png (8-bit palette)");
+  CHECK(report["textures"][0]["bytes_vs_resize"].get<double>() <= 1.1);
+}
+
 TEST_CASE("CLI: copy keeps image file names unless that would overwrite other bytes", "[cli]") {
   test::Scratch dir("cli-copy-names");
   test::fs::create_directories(dir / "in");
