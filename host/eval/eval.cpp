@@ -633,6 +633,7 @@ struct ReferenceViews {
 // paper's texels under the charts).
 struct Setup {
   LayoutMesh ref;
+  bool driving_forced = false;  // EvalOptions::driving_image chose ref.image
   std::vector<std::array<float, 16>> cameras;  // the whole views (contact sheets)
   std::vector<ViewFrame> frames;               // the views as scored
   TextureFilter filter = TextureFilter::Trilinear;
@@ -1062,7 +1063,8 @@ Setup set_up(const io::GltfFile& reference, engine::Engine& engine, const EvalOp
   // (a map on another UV set, a normal map without RGB) is an error when lit was asked for,
   // and under auto falls back to unlit with a warning in the report.
   const bool want_lit = o.shading == Shading::Lit || (o.shading == Shading::Auto && detail::has_normal_map(reference));
-  s.ref = detail::extract_layout(reference, "input", want_lit);
+  s.ref = detail::extract_layout(reference, "input", want_lit, o.driving_image);
+  s.driving_forced = o.driving_image >= 0;
   if (want_lit && !s.ref.lit_problem.empty()) {
     if (o.shading == Shading::Lit) throw InputError(reference.path, "cannot evaluate lit: " + s.ref.lit_problem);
     s.shading_warning = "lit shading skipped, q is unlit: " + s.ref.lit_problem;
@@ -1226,7 +1228,9 @@ AsWrittenScorer::AsWrittenScorer(const io::GltfFile& reference, engine::Engine& 
 AsWrittenScorer::~AsWrittenScorer() = default;
 
 Scored AsWrittenScorer::score(const io::GltfFile& candidate) {
-  return score_own(state_->engine, state_->setup, detail::extract_layout(candidate, "candidate", state_->setup.lit),
+  return score_own(state_->engine, state_->setup,
+                   detail::extract_layout(candidate, "candidate", state_->setup.lit,
+                                          state_->setup.driving_forced ? state_->setup.ref.image : -1),
                    state_->timing);
 }
 

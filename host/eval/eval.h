@@ -54,6 +54,9 @@ struct EvalOptions {
   double fov_degrees = 30;
   std::optional<io::AstcOptions> codec;  // q after ASTC compression (eval.cpp, "Codec"); none: uncompressed
   Shading shading = Shading::Auto;       // which q is q (eval.cpp, "Shading")
+  // The image whose primitives the views draw (glTF image index); -1: the base colour
+  // sampled by the most triangles (layout.h, extract_layout). Reference and candidates alike.
+  int driving_image = -1;
 };
 
 // One layout to evaluate: a loaded glTF of the same mesh as the reference.

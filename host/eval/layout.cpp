@@ -153,7 +153,7 @@ void add_lit_inputs(const io::GltfFile& file, const io::Asset& asset, const std:
 
 }  // namespace
 
-LayoutMesh extract_layout(const io::GltfFile& file, const std::string& name, bool lit) {
+LayoutMesh extract_layout(const io::GltfFile& file, const std::string& name, bool lit, int image_index) {
   io::Asset asset = io::build_asset(file);
   // The driving texture: base colour first, then the most triangles sampling it.
   int best = -1;
@@ -171,8 +171,11 @@ LayoutMesh extract_layout(const io::GltfFile& file, const std::string& name, boo
     for (int p : prims) tris += asset.primitives[size_t(p)].triangle_count();
     if (tris == 0) continue;
     std::pair<int, size_t> score{color ? 1 : 0, tris};
+    if (image_index >= 0) score = {img.index == image_index ? 1 : 0, img.index == image_index ? tris : 0};
     if (score > best_score) best_score = score, best = img.index;
   }
+  if (image_index >= 0 && best != image_index)
+    throw InputError(file.path, "no triangle primitive samples image " + std::to_string(image_index) + ": nothing to evaluate");
   if (best < 0) throw InputError(file.path, "no triangle primitive samples a texture: nothing to evaluate");
   LayoutMesh m;
   m.name = name, m.file = file.path, m.image = best, m.texture_source = "original";

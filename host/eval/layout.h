@@ -53,7 +53,8 @@ bool has_normal_map(const io::GltfFile& file);
 // shading needs (see LayoutMesh): maps sampled through another UV set or transform than
 // the driving texture's, and normal maps with fewer than 3 channels, leave lit_problem set
 // (the caller falls back or fails, saying so). Throws InputError.
-LayoutMesh extract_layout(const io::GltfFile& file, const std::string& name, bool lit = false);
+// `image` >= 0: that image instead (InputError when no triangle primitive samples it).
+LayoutMesh extract_layout(const io::GltfFile& file, const std::string& name, bool lit = false, int image = -1);
 
 // Per triangle uv area and 3-D area.
 double uv_area(const std::vector<float>& uvs, const std::vector<uint32_t>& indices, size_t t);

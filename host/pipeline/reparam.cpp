@@ -1288,6 +1288,27 @@ void set_up_scoring(Run& run) {
   score_options.noise_floor = false;  // eval's 7 extra renders; the candidates are compared as measured
   try {
     scorer = std::make_unique<eval::AsWrittenScorer>(original, engine, score_options);
+    // The views draw one image's primitives (eval's driving texture). Where reparam leaves
+    // that image's layout as it is (TextureTransformTest's 'UV.png', sampled through
+    // KHR_texture_transform), they are drawn with the driver of the re-parameterized layout
+    // that the most triangles sample instead, so that q sees a layout reparam changes.
+    const int seen = scorer->driving_image();
+    bool seen_untouched = false;
+    int driver = -1;
+    size_t most = 0;
+    for (const Layout& L : run.layouts) {
+      if (std::find(L.images.begin(), L.images.end(), seen) != L.images.end()) seen_untouched = !L.untouched.empty();
+      if (!L.untouched.empty()) continue;
+      size_t triangles = 0;
+      for (const UvSet& u : L.uv_sets) triangles += run.asset.primitives[size_t(u.primitive)].triangle_count();
+      if (triangles > most) most = triangles, driver = L.driver;
+    }
+    if (seen_untouched && driver >= 0) {
+      score_options.driving_image = driver;
+      scorer = std::make_unique<eval::AsWrittenScorer>(original, engine, score_options);
+      warnings.push_back("scoring: the views draw the primitives of image " + std::to_string(driver) +
+                         " (re-parameterized), not those of image " + std::to_string(seen) + ", which reparam leaves as it is");
+    }
     run.result.scoring = ReparamResult::Scoring{scorer->resolution(), o.score_filter, scorer->shading()};
     if (!scorer->shading_warning().empty()) warnings.push_back("scoring: " + scorer->shading_warning());
   } catch (const InputError& e) {
@@ -1520,40 +1541,28 @@ void guard_against_resize(Run& run) {
   const double q_resize = score(run, resized, "the plain resize").q;
   Guard& guard = run.result.guard;
   guard.ran = true, guard.q_reparam = chosen.q, guard.q_resize = q_resize;
-  // The views see one image's primitives: when reparam re-baked a different one, both q
-  // measure the same untouched texture.
+  // The views draw one image's primitives (a re-parameterized layout's: set_up_scoring),
+  // with the maps that share its layout (lit shading); a re-baked image of another layout
+  // changes unseen.
   const int seen = run.scorer->driving_image();
-  bool seen_rebaked = false;
-  for (const auto& t : chosen.textures) seen_rebaked |= t.image == seen;
-  // ... and only the maps that share its layout (lit shading); a re-baked image of another
-  // layout changes unseen.
   std::vector<int> rendered;
   for (const auto& l : chosen.layouts)
     if (std::find(l.images.begin(), l.images.end(), seen) != l.images.end()) rendered.insert(rendered.end(), l.images.begin(), l.images.end());
   for (const auto& t : chosen.textures)
     if (std::find(rendered.begin(), rendered.end(), t.image) == rendered.end()) guard.unseen.push_back(t.name);
-  if (!guard.unseen.empty() && seen_rebaked) {
+  if (!guard.unseen.empty()) {
     std::string names;
     for (const auto& n : guard.unseen) names += (names.empty() ? "'" : ", '") + n + "'";
     warnings.push_back("the scoring views render only the layout of image " + std::to_string(seen) +
                        "; q does not see the re-baked " + names + " (neither reparam's nor the resize's)");
   }
-  if (!seen_rebaked) {
-    std::string why;
-    for (const auto& l : chosen.layouts)
-      if (l.untouched && std::find(l.images.begin(), l.images.end(), seen) != l.images.end()) why = *l.untouched;
-    guard.unmeasured = "the scoring views render only the primitives that sample image " + std::to_string(seen) +
-                       ", which reparam left as it was" + (why.empty() ? std::string() : " (" + why + ")") +
-                       ": the q of reparam's layouts and of the resize measure that image alone";
-  }
-  // A layout that was not scored (q < 0), or not seen, never wins against one that was.
-  if (!(chosen.q >= 0 && chosen.q < q_resize && guard.unmeasured.empty())) {
+  // A layout that was not scored (q < 0) never wins against one that was.
+  if (!(chosen.q >= 0 && chosen.q < q_resize)) {
     chosen_by = "resize";
     file = std::move(resized);
     for (auto& t : chosen.textures) t.new_bytes = file.image_bytes[size_t(t.image)].size();
     const std::string q = "(q " + std::to_string(q_resize) + " vs " + std::to_string(chosen.q) + ")";
-    warnings.push_back(!guard.unmeasured.empty() ? guard.unmeasured + ": wrote the resize"
-                       : q_resize == chosen.q ? "the plain resize to the same texels ties with reparam's layout " + q + ": wrote the resize"
+    warnings.push_back(q_resize == chosen.q ? "the plain resize to the same texels ties with reparam's layout " + q + ": wrote the resize"
                                               : "the plain resize to the same texels looks better " + q + ": wrote the resize");
   }
   guard.chosen = chosen_by;

@@ -111,11 +111,6 @@ struct Guard {
   std::string skipped;  // why eval could not score the asset, when it could not
   double q_reparam = -1, q_resize = -1;
   std::string chosen;   // "reparam" | "resize"
-  // Why the two q say nothing about reparam's layouts, when they do not: the scoring views
-  // render one image's primitives (eval's driving texture), and reparam left that image
-  // untouched (TextureTransformTest: 'UV.png' is sampled through KHR_texture_transform;
-  // both q are 0). The resize is written then: reparam's layouts cannot be shown better.
-  std::string unmeasured;
   // Re-baked images that the scoring views do not render (their layout is not the driving
   // image's: MultiUVTest's emissive map on TEXCOORD_1), by name: neither q sees them.
   std::vector<std::string> unseen;

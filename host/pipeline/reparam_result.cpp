@@ -159,7 +159,6 @@ json ReparamResult::to_json() const {
   if (guard.ran) {
     report["guard"] = {{"q_reparam", guard.q_reparam}, {"q_resize", guard.q_resize}, {"resize", "lanczos3-srgb"},
                        {"chosen", guard.chosen}};
-    if (!guard.unmeasured.empty()) report["guard"]["unmeasured"] = guard.unmeasured;
     if (!guard.unseen.empty()) report["guard"]["unseen"] = guard.unseen;
   }
   else if (!guard.skipped.empty())

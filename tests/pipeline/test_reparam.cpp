@@ -192,11 +192,13 @@ TEST_CASE("reparam keeps shared assets valid and leaves tiled and transformed la
   }
 }
 
-TEST_CASE("reparam's guard says when its views cannot see the layouts it changed", "[pipeline][reparam][shared]") {
-  // TextureTransformTest: the views render the primitives of its most-sampled base colour,
-  // 'UV.png', which is sampled through KHR_texture_transform and so left as it was; reparam
-  // re-lays the three marker images. Both q then measure 'UV.png' alone (0 and 0): the
-  // guard must say so and write the resize, not call it "better".
+TEST_CASE("reparam's scoring draws a layout it changes, and names the re-baked images its views do not draw",
+          "[pipeline][reparam][shared]") {
+  // TextureTransformTest: eval's views draw the primitives of the most-sampled base colour,
+  // 'UV.png', which is sampled through KHR_texture_transform and so left as it is; reparam
+  // re-lays the three marker images. Scored that way both q measured 'UV.png' alone (0 and
+  // 0). The views now draw a re-laid marker's primitives, so both q are measured, and the
+  // other two markers are named as unseen.
   if (!test::shared_dir()) UVPRESS_SKIP("../shared is absent");
   auto engine = engine::make_cpu_engine({});
   pipeline::ReparamOptions o;
@@ -204,27 +206,29 @@ TEST_CASE("reparam's guard says when its views cannot see the layouts it changed
   io::GltfFile out = io::load_gltf((*test::shared_dir() / "assets/TextureTransformTest/glTF/TextureTransformTest.gltf").string());
   const pipeline::ReparamResult r = pipeline::reparam(out, *engine, o);
   REQUIRE(r.guard.ran);
-  CHECK(r.guard.unmeasured.find("'UV.png'") != std::string::npos);
-  CHECK(r.chosen == "resize");
-  CHECK(r.to_json()["guard"]["unmeasured"] == r.guard.unmeasured);
-  CHECK(r.guard.unseen == std::vector<std::string>{"Correct.png", "NotSupported.png", "Error.png"});
-  // MultiUVTest: the views render its base colour's layout (TEXCOORD_0); its emissive map
-  // on TEXCOORD_1 is re-laid too, and q cannot see it: the report names it.
+  CHECK(r.guard.q_reparam > 0);  // a changed layout, measured
+  CHECK(r.guard.q_resize > 0);
+  CHECK(r.guard.unseen.size() == 2);  // two of Correct.png, NotSupported.png, Error.png
+  const auto report = r.to_json();
+  CHECK(report["guard"]["unseen"].size() == 2);
+  bool said = false;
+  for (const auto& w : report["warnings"]) said |= w.get<std::string>().rfind("scoring: the views draw the primitives of image", 0) == 0;
+  CHECK(said);
+  // MultiUVTest: the views draw its base colour's layout (TEXCOORD_0); its emissive map on
+  // TEXCOORD_1 is re-laid too, and q cannot see it: the report names it.
   io::GltfFile multi = io::load_gltf((*test::shared_dir() / "assets/MultiUVTest/glTF/MultiUVTest.gltf").string());
   pipeline::ReparamOptions paper = o;
   paper.candidates = false;  // the paper's layout alone: the guard is what is checked
   const pipeline::ReparamResult m = pipeline::reparam(multi, *engine, paper);
   REQUIRE(m.guard.ran);
-  CHECK(m.guard.unmeasured.empty());
   CHECK(m.guard.unseen == std::vector<std::string>{"uv1.png"});
-  // A layout the views do render: nothing unmeasured (the demo, one re-baked texture).
+  // One re-baked texture, drawn: nothing unseen (the demo).
   io::GltfFile demo = pipeline::make_demo_asset({16, 128});
   o.triangle.view_size = 16;
   const pipeline::ReparamResult d = pipeline::reparam(demo, *engine, o);
   REQUIRE(d.guard.ran);
-  CHECK(d.guard.unmeasured.empty());
   CHECK(d.guard.unseen.empty());
-  CHECK(d.to_json()["guard"].count("unmeasured") == 0);
+  CHECK(d.to_json()["guard"].count("unseen") == 0);
 }
 
 TEST_CASE("reparam --max-gmsd: the cheapest size that meets the bound, tighter bounds cost more", "[pipeline][reparam]") {

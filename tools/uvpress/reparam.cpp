@@ -145,8 +145,6 @@ void add_reparam(CLI::App& app, Globals& g) {
           std::snprintf(text, sizeof text, "; on screen q %.3g vs %.3g for a plain resize to the same texels (%s layout kept%s)",
                         r.guard.q_reparam, r.guard.q_resize, r.layout.c_str(),
                         r.guard.unseen.empty() ? "" : r.guard.unseen.size() == 1 ? "; 1 re-baked image unseen by q" : "; re-baked images unseen by q");
-        else if (!r.guard.unmeasured.empty())
-          std::snprintf(text, sizeof text, "; wrote a plain resize: the scoring views do not see the re-parameterized layouts (see the warnings)");
         else if (r.guard.q_resize == r.guard.q_reparam)
           std::snprintf(text, sizeof text, "; wrote a plain resize: it ties with reparam's layout on screen (q %.3g both)", r.guard.q_resize);
         else
