@@ -342,6 +342,11 @@ void measure_unit_losses(const io::Asset& asset, const Layout& L, Prepared& P, e
   }
 }
 
+// The guard's views from afar: eval's 20 cameras with the asset filling views of this many
+// pixels a side (three.js's far views in tests/client), where a viewer samples coarse mip
+// levels that the near views (every texel resolved) never reach.
+constexpr uint32_t kFarViewPixels = 256;
+
 // A candidate layout: the triangle stage's targets with every stretch factor floored at
 // `floor` (the paper's targets at lambda_min), with or without its rotations, or no
 // reshaping at all (`repack`: the input's charts, only repacked; `unit-scale`: each packing
@@ -991,6 +996,7 @@ struct Run {
   size_t optimized = 0, infeasible = 0;  // triangles through the triangle stage, those kept at the identity
   double t_triangle = 0, t_score = 0, t_build = 0;  // t_build: every candidate's realize()
   std::unique_ptr<eval::AsWrittenScorer> scorer;  // candidates and the guard: 20 views as written
+  std::unique_ptr<eval::AsWrittenScorer> far_scorer;  // the guard's views at a distance (kFarViewPixels)
   std::string score_failure;                      // why eval cannot score the asset
   Realized chosen;                                // the kept candidate, built into `file`
   Candidate chosen_plan;
@@ -1309,6 +1315,13 @@ void set_up_scoring(Run& run) {
       warnings.push_back("scoring: the views draw the primitives of image " + std::to_string(driver) +
                          " (re-parameterized), not those of image " + std::to_string(seen) + ", which reparam leaves as it is");
     }
+    // The same views from afar (the asset filling kFarViewPixels): what the guard says about
+    // coarse mip levels, which views that resolve every texel never sample.
+    if (o.score_resolution == 0 || o.score_resolution > kFarViewPixels) {
+      eval::EvalOptions far = score_options;
+      far.resolution = kFarViewPixels;
+      run.far_scorer = std::make_unique<eval::AsWrittenScorer>(original, engine, far);
+    }
     run.result.scoring = ReparamResult::Scoring{scorer->resolution(), o.score_filter, scorer->shading()};
     if (!scorer->shading_warning().empty()) warnings.push_back("scoring: " + scorer->shading_warning());
   } catch (const InputError& e) {
@@ -1541,6 +1554,11 @@ void guard_against_resize(Run& run) {
   const double q_resize = score(run, resized, "the plain resize").q;
   Guard& guard = run.result.guard;
   guard.ran = true, guard.q_reparam = chosen.q, guard.q_resize = q_resize;
+  if (run.far_scorer) {
+    const Stopwatch t1;
+    guard.far = Guard::Far{kFarViewPixels, run.far_scorer->score(file).q, run.far_scorer->score(resized).q};
+    t_score += t1.seconds();
+  }
   // The views draw one image's primitives (a re-parameterized layout's: set_up_scoring),
   // with the maps that share its layout (lit shading); a re-baked image of another layout
   // changes unseen.
@@ -1566,6 +1584,15 @@ void guard_against_resize(Run& run) {
                                               : "the plain resize to the same texels looks better " + q + ": wrote the resize");
   }
   guard.chosen = chosen_by;
+  // The choice is made on the near views (q); from afar reparam's layout may still lose.
+  if (chosen_by == "reparam" && guard.far && guard.far->q_reparam > guard.far->q_resize) {
+    char text[240];
+    std::snprintf(text, sizeof text,
+                  "from afar (the asset filling %u-pixel views: coarse mip levels) the plain resize looks better: q %.3g vs %.3g "
+                  "for reparam's layout, which is kept for its q up close",
+                  guard.far->resolution, guard.far->q_resize, guard.far->q_reparam);
+    warnings.push_back(text);
+  }
 }
 
 // --max-gmsd: the layout made at the source density, evaluated on a cost grid (eval's

@@ -114,6 +114,14 @@ struct Guard {
   // Re-baked images that the scoring views do not render (their layout is not the driving
   // image's: MultiUVTest's emissive map on TEXCOORD_1), by name: neither q sees them.
   std::vector<std::string> unseen;
+  // Both files scored again from afar (eval's cameras, views of `resolution` pixels a side:
+  // coarse mip levels, gutters and the packing's neighbours show there). Said, not chosen
+  // on: none when the guard's near views were set by --score-resolution at or below it.
+  struct Far {
+    uint32_t resolution = 0;
+    double q_reparam = -1, q_resize = -1;
+  };
+  std::optional<Far> far;
 };
 
 // --max-gmsd (report: max_gmsd): the cheapest point of the layout's curve that meets the bound.

@@ -160,6 +160,8 @@ json ReparamResult::to_json() const {
     report["guard"] = {{"q_reparam", guard.q_reparam}, {"q_resize", guard.q_resize}, {"resize", "lanczos3-srgb"},
                        {"chosen", guard.chosen}};
     if (!guard.unseen.empty()) report["guard"]["unseen"] = guard.unseen;
+    if (guard.far)
+      report["guard"]["far"] = {{"resolution", guard.far->resolution}, {"q_reparam", guard.far->q_reparam}, {"q_resize", guard.far->q_resize}};
   }
   else if (!guard.skipped.empty())
     report["guard"] = {{"skipped", guard.skipped}};

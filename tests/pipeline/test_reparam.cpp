@@ -284,6 +284,13 @@ TEST_CASE("reparam's guard writes the plain resize when the layout loses, and re
   CHECK(written.q == Approx(q_resize).epsilon(1e-9));
   CHECK(written.c_r == Approx(report["cost_ratio"].get<double>()).epsilon(1e-9));
   CHECK(eval::score_as_written(in, layout, *engine, eo).q == Approx(q_reparam).epsilon(1e-9));
+  // The same two files from afar (views of 256 pixels), as the report says.
+  REQUIRE(report["guard"]["far"].is_object());
+  eval::EvalOptions far = eo;
+  far.resolution = 256;
+  CHECK(report["guard"]["far"]["resolution"] == 256);
+  CHECK(eval::score_as_written(in, out, *engine, far).q == Approx(report["guard"]["far"]["q_resize"].get<double>()).epsilon(1e-9));
+  CHECK(eval::score_as_written(in, layout, *engine, far).q == Approx(report["guard"]["far"]["q_reparam"].get<double>()).epsilon(1e-9));
   // --force-reparam: reparam's layout is written, with the score the guard reported.
   pipeline::ReparamOptions forced = losing;
   forced.guard = false;

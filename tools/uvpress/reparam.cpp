@@ -151,6 +151,11 @@ void add_reparam(CLI::App& app, Globals& g) {
           std::snprintf(text, sizeof text, "; wrote a plain resize: it looks better (q %.3g) than reparam's layout (q %.3g)",
                         r.guard.q_resize, r.guard.q_reparam);
         verdict = text;
+        if (r.chosen == "reparam" && r.guard.far && r.guard.far->q_reparam > r.guard.far->q_resize) {
+          std::snprintf(text, sizeof text, "; from afar (%u-px views) the resize looks better: q %.3g vs %.3g",
+                        r.guard.far->resolution, r.guard.far->q_resize, r.guard.far->q_reparam);
+          verdict += text;
+        }
       }
       // Texture bytes as encoded, and VRAM block-compressed (BC7/ASTC 4x4) with mip-maps,
       // over every image of the asset (the report's texture_totals count the re-baked ones).
