@@ -347,6 +347,7 @@ void measure_unit_losses(const io::Asset& asset, const Layout& L, Prepared& P, e
 // levels that the near views (every texel resolved) never reach.
 constexpr uint32_t kFarViewPixels = 256;
 
+
 // A candidate layout: the triangle stage's targets with every stretch factor floored at
 // `floor` (the paper's targets at lambda_min), with or without its rotations, or no
 // reshaping at all (`repack`: the input's charts, only repacked; `unit-scale`: each packing
@@ -397,6 +398,7 @@ struct Realized {
   size_t unreshaped_units = 0;       // units whose texels could be copied (cand.exact), before snapping
   double t_mesh = 0, t_pack = 0, t_bake = 0;
   double q = -1;                     // 20-view GMSD of the file as written (-1: not scored)
+  double q_far = -1;                 // the same from afar (Run::far_scorer; -1: not scored)
   // Images encoded as drafts (io::EncodeSettings::draft), with their texels: encoded for
   // good (finish_encoding) only if this candidate is kept.
   std::vector<std::pair<int, Image>> drafts;
@@ -1343,8 +1345,17 @@ eval::Scored score(Run& run, const io::GltfFile& f, const std::string& name) {
   return scored;
 }
 
+// The same from afar (Run::far_scorer); -1 without one.
+double score_far(Run& run, const io::GltfFile& f) {
+  if (!run.far_scorer) return -1;
+  Stopwatch t0;
+  const double q = run.far_scorer->score(f).q;
+  run.t_score += t0.seconds();
+  return q;
+}
+
 // Builds a candidate into a copy of the input, scores it, and keeps it (in run.file) when
-// it is the first or scores better. Returns its unreshaped units (Realized::unreshaped_units).
+// it is the first or scores better (q up close; q_far is measured and reported). Returns its unreshaped units (Realized::unreshaped_units).
 size_t consider_candidate(Run& run, const Candidate& c) {
   io::GltfFile f = run.original;
   const Stopwatch t0;
@@ -1352,9 +1363,9 @@ size_t consider_candidate(Run& run, const Candidate& c) {
                        run.warnings);
   run.t_build += t0.seconds();
   const Stopwatch t1;
-  if (run.scorer && r.overlaps_new == 0) r.q = score(run, f, r.name).q;
-  run.result.candidates.push_back({r.name, r.old_texels > 0 ? r.new_texels / r.old_texels : 1.0, r.q, r.overlaps_new,
-                                   r.t_mesh, r.t_pack, r.t_bake, t1.seconds()});
+  if (run.scorer && r.overlaps_new == 0) r.q = score(run, f, r.name).q, r.q_far = score_far(run, f);
+  run.result.candidates.push_back({r.name, r.old_texels > 0 ? r.new_texels / r.old_texels : 1.0, r.q, r.q_far,
+                                   r.overlaps_new, r.t_mesh, r.t_pack, r.t_bake, t1.seconds()});
   const size_t unreshaped = r.unreshaped_units;
   // New UV overlaps disqualify a layout whatever its score: never written.
   if (r.overlaps_new > 0) return unreshaped;
@@ -1554,11 +1565,7 @@ void guard_against_resize(Run& run) {
   const double q_resize = score(run, resized, "the plain resize").q;
   Guard& guard = run.result.guard;
   guard.ran = true, guard.q_reparam = chosen.q, guard.q_resize = q_resize;
-  if (run.far_scorer) {
-    const Stopwatch t1;
-    guard.far = Guard::Far{kFarViewPixels, run.far_scorer->score(file).q, run.far_scorer->score(resized).q};
-    t_score += t1.seconds();
-  }
+  if (run.far_scorer) guard.far = Guard::Far{kFarViewPixels, chosen.q_far, score_far(run, resized)};
   // The views draw one image's primitives (a re-parameterized layout's: set_up_scoring),
   // with the maps that share its layout (lit shading); a re-baked image of another layout
   // changes unseen.
@@ -1579,18 +1586,20 @@ void guard_against_resize(Run& run) {
     chosen_by = "resize";
     file = std::move(resized);
     for (auto& t : chosen.textures) t.new_bytes = file.image_bytes[size_t(t.image)].size();
-    const std::string q = "(q " + std::to_string(q_resize) + " vs " + std::to_string(chosen.q) + ")";
+    std::string q = "(q " + std::to_string(q_resize) + " vs " + std::to_string(chosen.q);
+    if (guard.far) q += "; from afar " + std::to_string(guard.far->q_resize) + " vs " + std::to_string(guard.far->q_reparam);
+    q += ")";
     warnings.push_back(q_resize == chosen.q ? "the plain resize to the same texels ties with reparam's layout " + q + ": wrote the resize"
                                               : "the plain resize to the same texels looks better " + q + ": wrote the resize");
   }
   guard.chosen = chosen_by;
-  // The choice is made on the near views (q); from afar reparam's layout may still lose.
+  // The choice is made up close (q); from afar reparam's layout may still lose: said.
   if (chosen_by == "reparam" && guard.far && guard.far->q_reparam > guard.far->q_resize) {
-    char text[240];
+    char text[260];
     std::snprintf(text, sizeof text,
                   "from afar (the asset filling %u-pixel views: coarse mip levels) the plain resize looks better: q %.3g vs %.3g "
-                  "for reparam's layout, which is kept for its q up close",
-                  guard.far->resolution, guard.far->q_resize, guard.far->q_reparam);
+                  "for reparam's layout, which is kept for what it gains up close (q %.3g vs %.3g)",
+                  guard.far->resolution, guard.far->q_resize, guard.far->q_reparam, guard.q_reparam, guard.q_resize);
     warnings.push_back(text);
   }
 }

@@ -140,22 +140,23 @@ void add_reparam(CLI::App& app, Globals& g) {
       } else if (!r.guard.skipped.empty()) {
         verdict = "; not compared with a plain resize (eval cannot score this asset)";
       } else if (r.guard.ran) {
-        char text[200];
+        // q up close, then from afar where it was measured: what the guard weighs.
+        const auto& far = r.guard.far;
+        char text[320], afar[96] = "";
+        if (far) std::snprintf(afar, sizeof afar, ", from afar %.3g vs %.3g", far->q_reparam, far->q_resize);
         if (r.chosen == "reparam")
-          std::snprintf(text, sizeof text, "; on screen q %.3g vs %.3g for a plain resize to the same texels (%s layout kept%s)",
-                        r.guard.q_reparam, r.guard.q_resize, r.layout.c_str(),
+          std::snprintf(text, sizeof text, "; on screen q %.3g vs %.3g%s for a plain resize to the same texels (%s layout kept%s)",
+                        r.guard.q_reparam, r.guard.q_resize, afar, r.layout.c_str(),
                         r.guard.unseen.empty() ? "" : r.guard.unseen.size() == 1 ? "; 1 re-baked image unseen by q" : "; re-baked images unseen by q");
         else if (r.guard.q_resize == r.guard.q_reparam)
           std::snprintf(text, sizeof text, "; wrote a plain resize: it ties with reparam's layout on screen (q %.3g both)", r.guard.q_resize);
+        else if (far)
+          std::snprintf(text, sizeof text, "; wrote a plain resize: it looks better (q %.3g, from afar %.3g) than reparam's layout (q %.3g, %.3g)",
+                        r.guard.q_resize, far->q_resize, r.guard.q_reparam, far->q_reparam);
         else
           std::snprintf(text, sizeof text, "; wrote a plain resize: it looks better (q %.3g) than reparam's layout (q %.3g)",
                         r.guard.q_resize, r.guard.q_reparam);
         verdict = text;
-        if (r.chosen == "reparam" && r.guard.far && r.guard.far->q_reparam > r.guard.far->q_resize) {
-          std::snprintf(text, sizeof text, "; from afar (%u-px views) the resize looks better: q %.3g vs %.3g",
-                        r.guard.far->resolution, r.guard.far->q_resize, r.guard.far->q_reparam);
-          verdict += text;
-        }
       }
       // Texture bytes as encoded, and VRAM block-compressed (BC7/ASTC 4x4) with mip-maps,
       // over every image of the asset (the report's texture_totals count the re-baked ones).
