@@ -74,9 +74,11 @@ void add_demo(CLI::App& app, Globals& g) {
       // The verdict, measured on the spot: what was written and why.
       if (report.guard.ran) {
         const pipeline::Guard& gr = report.guard;
-        std::printf("demo: wrote %s: q %.3g for reparam's layout vs %.3g for a plain Lanczos resize to the same texels\n",
+        char afar[96] = "";
+        if (gr.far) std::snprintf(afar, sizeof afar, " (from afar, %u-px views: %.3g vs %.3g)", gr.far->resolution, gr.far->q_reparam, gr.far->q_resize);
+        std::printf("demo: wrote %s: q %.3g for reparam's layout vs %.3g for a plain Lanczos resize to the same texels%s\n",
                     report.chosen == "reparam" ? "reparam's layout" : "the plain resize (it looks better)",
-                    gr.q_reparam, gr.q_resize);
+                    gr.q_reparam, gr.q_resize, afar);
       }
       // Pixels at equal q: reparam's own curve (at each c_r the best of its kept plan and the
       // best other, written and scored as written) against the input's resize curve, both at
