@@ -49,6 +49,11 @@ AssetRow row_from_report(const json& report, const std::string& status) {
     if (r.contains("guard") && r["guard"].is_object() && r["guard"].contains("q_resize")) {
       row.q = number(r["guard"], r.value("chosen", "") == "resize" ? "q_resize" : "q_reparam");
       row.q_resize = number(r["guard"], "q_resize");
+      if (r["guard"].contains("far") && r["guard"]["far"].is_object()) {
+        const json& far = r["guard"]["far"];
+        row.q_far = number(far, r.value("chosen", "") == "resize" ? "q_resize" : "q_reparam");
+        row.q_far_resize = number(far, "q_resize");
+      }
     }
   }
   return row;
@@ -70,6 +75,8 @@ json to_json(const AssetRow& row) {
   if (row.written) j["written"] = *row.written;
   if (row.q) j["q"] = *row.q;
   if (row.q_resize) j["q_resize"] = *row.q_resize;
+  if (row.q_far) j["q_far"] = *row.q_far;
+  if (row.q_far_resize) j["q_far_resize"] = *row.q_far_resize;
   return j;
 }
 

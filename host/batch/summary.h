@@ -29,6 +29,7 @@ struct AssetRow {
   std::optional<std::string> written;
   // The written file's q and the plain resize's, as the guard compared them (both or none).
   std::optional<double> q, q_resize;
+  std::optional<double> q_far, q_far_resize;  // the same from afar (the guard's far views)
 };
 
 // The row of an asset's report (NAME.report.json) under `status`.

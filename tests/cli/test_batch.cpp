@@ -92,6 +92,9 @@ TEST_CASE("batch: reports, summary, one failure never stops the others, resume",
     CHECK(row["written"] == rep["reparam"]["chosen"]);
     REQUIRE(rep["reparam"]["guard"].contains("q_resize"));
     CHECK(row["q_resize"] == rep["reparam"]["guard"]["q_resize"]);
+    REQUIRE(rep["reparam"]["guard"]["far"].is_object());
+    CHECK(row["q_far_resize"] == rep["reparam"]["guard"]["far"]["q_resize"]);
+    CHECK(row["q_far"] == rep["reparam"]["guard"]["far"][row["written"] == "resize" ? "q_resize" : "q_reparam"]);
     CHECK(test::validate_gltf(out / (name + ".glb"))["numErrors"] == 0);
   }
 
