@@ -1322,7 +1322,11 @@ void set_up_scoring(Run& run) {
     if (o.score_resolution == 0 || o.score_resolution > kFarViewPixels) {
       eval::EvalOptions far = score_options;
       far.resolution = kFarViewPixels;
-      run.far_scorer = std::make_unique<eval::AsWrittenScorer>(original, engine, far);
+      try {
+        run.far_scorer = std::make_unique<eval::AsWrittenScorer>(original, engine, far);
+      } catch (const InputError& e) {  // the near views stand: only what they cannot tell goes unsaid
+        warnings.push_back(std::string("scoring: not scored from afar (") + e.what() + ")");
+      }
     }
     run.result.scoring = ReparamResult::Scoring{scorer->resolution(), o.score_filter, scorer->shading()};
     if (!scorer->shading_warning().empty()) warnings.push_back("scoring: " + scorer->shading_warning());
