@@ -347,7 +347,6 @@ void measure_unit_losses(const io::Asset& asset, const Layout& L, Prepared& P, e
 // levels that the near views (every texel resolved) never reach.
 constexpr uint32_t kFarViewPixels = 256;
 
-
 // A candidate layout: the triangle stage's targets with every stretch factor floored at
 // `floor` (the paper's targets at lambda_min), with or without its rotations, or no
 // reshaping at all (`repack`: the input's charts, only repacked; `unit-scale`: each packing
@@ -1359,7 +1358,8 @@ double score_far(Run& run, const io::GltfFile& f) {
 }
 
 // Builds a candidate into a copy of the input, scores it, and keeps it (in run.file) when
-// it is the first or scores better (q up close; q_far is measured and reported). Returns its unreshaped units (Realized::unreshaped_units).
+// it is the first or scores better (q up close; q_far is measured and reported). Returns
+// its unreshaped units (Realized::unreshaped_units).
 size_t consider_candidate(Run& run, const Candidate& c) {
   io::GltfFile f = run.original;
   const Stopwatch t0;

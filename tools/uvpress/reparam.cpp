@@ -140,7 +140,7 @@ void add_reparam(CLI::App& app, Globals& g) {
       } else if (!r.guard.skipped.empty()) {
         verdict = "; not compared with a plain resize (eval cannot score this asset)";
       } else if (r.guard.ran) {
-        // q up close, then from afar where it was measured: what the guard weighs.
+        // q up close (what the guard chooses by), then from afar where it was measured.
         const auto& far = r.guard.far;
         char text[320], afar[96] = "";
         if (far) std::snprintf(afar, sizeof afar, ", from afar %.3g vs %.3g", far->q_reparam, far->q_resize);
