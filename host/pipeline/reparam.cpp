@@ -996,6 +996,7 @@ struct Run {
   json warnings = json::array();
   size_t optimized = 0, infeasible = 0;  // triangles through the triangle stage, those kept at the identity
   double t_triangle = 0, t_score = 0, t_build = 0;  // t_build: every candidate's realize()
+  double t_score_far = 0;                           // the part of t_score spent on the far views
   std::unique_ptr<eval::AsWrittenScorer> scorer;  // candidates and the guard: 20 views as written
   std::unique_ptr<eval::AsWrittenScorer> far_scorer;  // the guard's views at a distance (kFarViewPixels)
   std::string score_failure;                      // why eval cannot score the asset
@@ -1353,7 +1354,7 @@ double score_far(Run& run, const io::GltfFile& f) {
   if (!run.far_scorer) return -1;
   Stopwatch t0;
   const double q = run.far_scorer->score(f).q;
-  run.t_score += t0.seconds();
+  run.t_score += t0.seconds(), run.t_score_far += t0.seconds();
   return q;
 }
 
@@ -1731,6 +1732,7 @@ ReparamResult reparam(io::GltfFile& file, engine::Engine& engine, const ReparamO
   result.stages.pack = chosen.t_pack;
   result.stages.rebake = chosen.t_bake;
   result.stages.candidates_and_guard = run.t_score;
+  result.stages.score_far = run.t_score_far;
   result.stages.candidates_built = run.t_build;
   result.layout = chosen.name;
   if (resized) result.q = result.guard.q_resize;

@@ -260,6 +260,7 @@ struct StageSeconds {
   std::optional<double> max_gmsd_eval;  // --max-gmsd's curve
   double texture_costs = 0, triangle_stage = 0, mesh_stage = 0, pack = 0, rebake = 0;
   double candidates_and_guard = 0;  // scoring candidates and the resize as written
+  double score_far = 0;             // of which the views from afar (Guard::Far)
   double candidates_built = 0;      // building every candidate (mesh stage, packing, re-bakes), the kept one too
 };
 

@@ -188,6 +188,7 @@ json ReparamResult::to_json() const {
   s["pack"] = stages.pack;
   s["rebake"] = stages.rebake;
   s["candidates_and_guard"] = stages.candidates_and_guard;
+  s["score_far"] = stages.score_far;
   s["candidates_built"] = stages.candidates_built;
   report["warnings"] = warnings;
   report["seconds"] = seconds;
