@@ -397,7 +397,6 @@ struct Realized {
   size_t unreshaped_units = 0;       // units whose texels could be copied (cand.exact), before snapping
   double t_mesh = 0, t_pack = 0, t_bake = 0;
   double q = -1;                     // 20-view GMSD of the file as written (-1: not scored)
-  double q_far = -1;                 // the same from afar (Run::far_scorer; -1: not scored)
   // Images encoded as drafts (io::EncodeSettings::draft), with their texels: encoded for
   // good (finish_encoding) only if this candidate is kept.
   std::vector<std::pair<int, Image>> drafts;
@@ -1359,8 +1358,7 @@ double score_far(Run& run, const io::GltfFile& f) {
 }
 
 // Builds a candidate into a copy of the input, scores it, and keeps it (in run.file) when
-// it is the first or scores better (q up close; q_far is measured and reported). Returns
-// its unreshaped units (Realized::unreshaped_units).
+// it is the first or scores better. Returns its unreshaped units (Realized::unreshaped_units).
 size_t consider_candidate(Run& run, const Candidate& c) {
   io::GltfFile f = run.original;
   const Stopwatch t0;
@@ -1368,9 +1366,9 @@ size_t consider_candidate(Run& run, const Candidate& c) {
                        run.warnings);
   run.t_build += t0.seconds();
   const Stopwatch t1;
-  if (run.scorer && r.overlaps_new == 0) r.q = score(run, f, r.name).q, r.q_far = score_far(run, f);
-  run.result.candidates.push_back({r.name, r.old_texels > 0 ? r.new_texels / r.old_texels : 1.0, r.q, r.q_far,
-                                   r.overlaps_new, r.t_mesh, r.t_pack, r.t_bake, t1.seconds()});
+  if (run.scorer && r.overlaps_new == 0) r.q = score(run, f, r.name).q;
+  run.result.candidates.push_back({r.name, r.old_texels > 0 ? r.new_texels / r.old_texels : 1.0, r.q, r.overlaps_new,
+                                   r.t_mesh, r.t_pack, r.t_bake, t1.seconds()});
   const size_t unreshaped = r.unreshaped_units;
   // New UV overlaps disqualify a layout whatever its score: never written.
   if (r.overlaps_new > 0) return unreshaped;
@@ -1570,7 +1568,8 @@ void guard_against_resize(Run& run) {
   const double q_resize = score(run, resized, "the plain resize").q;
   Guard& guard = run.result.guard;
   guard.ran = true, guard.q_reparam = chosen.q, guard.q_resize = q_resize;
-  if (run.far_scorer) guard.far = Guard::Far{kFarViewPixels, chosen.q_far, score_far(run, resized)};
+  // From afar, the two files only (every candidate too would cost Fox's run 7 %).
+  if (run.far_scorer) guard.far = Guard::Far{kFarViewPixels, score_far(run, file), score_far(run, resized)};
   // The views draw one image's primitives (a re-parameterized layout's: set_up_scoring),
   // with the maps that share its layout (lit shading); a re-baked image of another layout
   // changes unseen.

@@ -99,7 +99,6 @@ struct CandidateScore {
   std::string name;
   double cost_ratio = 1;    // new image texels / old
   double q = -1;            // 20-view q as written; < 0: not scored
-  double q_far = -1;        // the same from afar (Guard::Far's views); < 0: not scored
   size_t overlaps_new = 0;  // > 0: disqualified, never written
   // Wall seconds: mesh stage, packing, re-bake (every image), scoring as written.
   double seconds_mesh = 0, seconds_pack = 0, seconds_bake = 0, seconds_score = 0;

@@ -151,7 +151,6 @@ json ReparamResult::to_json() const {
     report["candidates"].push_back({{"name", c.name},
                                     {"cost_ratio", c.cost_ratio},
                                     {"q", c.q >= 0 ? json(c.q) : json(nullptr)},
-                                    {"q_far", c.q_far >= 0 ? json(c.q_far) : json(nullptr)},
                                     {"overlaps_new", c.overlaps_new},
                                     {"seconds", {{"mesh_stage", c.seconds_mesh},
                                                  {"pack", c.seconds_pack},
