@@ -1321,8 +1321,11 @@ void set_up_scoring(Run& run) {
     if (o.score_resolution == 0 || o.score_resolution > kFarViewPixels) {
       eval::EvalOptions far = score_options;
       far.resolution = kFarViewPixels;
+      far.noise_floor = true;  // at this size sampling phase moves q by up to 10 % (the truck: 0.0019)
+      const Stopwatch t1;
       try {
         run.far_scorer = std::make_unique<eval::AsWrittenScorer>(original, engine, far);
+        run.t_score_far += t1.seconds();
       } catch (const InputError& e) {  // the near views stand: only what they cannot tell goes unsaid
         warnings.push_back(std::string("scoring: not scored from afar (") + e.what() + ")");
       }
@@ -1569,7 +1572,8 @@ void guard_against_resize(Run& run) {
   Guard& guard = run.result.guard;
   guard.ran = true, guard.q_reparam = chosen.q, guard.q_resize = q_resize;
   // From afar, the two files only (every candidate too would cost Fox's run 7 %).
-  if (run.far_scorer) guard.far = Guard::Far{kFarViewPixels, score_far(run, file), score_far(run, resized)};
+  if (run.far_scorer)
+    guard.far = Guard::Far{kFarViewPixels, score_far(run, file), score_far(run, resized), run.far_scorer->resolution().noise_floor};
   // The views draw one image's primitives (a re-parameterized layout's: set_up_scoring),
   // with the maps that share its layout (lit shading); a re-baked image of another layout
   // changes unseen.
@@ -1597,8 +1601,9 @@ void guard_against_resize(Run& run) {
                                               : "the plain resize to the same texels looks better " + q + ": wrote the resize");
   }
   guard.chosen = chosen_by;
-  // The choice is made up close (q); from afar reparam's layout may still lose: said.
-  if (chosen_by == "reparam" && guard.far && guard.far->q_reparam > guard.far->q_resize) {
+  // The choice is made up close (q); from afar reparam's layout may still lose: said, where
+  // by more than the far views' noise floor (less is sampling phase, a tie).
+  if (chosen_by == "reparam" && guard.far && guard.far->q_reparam > guard.far->q_resize + guard.far->noise_floor) {
     char text[260];
     std::snprintf(text, sizeof text,
                   "from afar (the asset filling %u-pixel views: coarse mip levels) the plain resize looks better: q %.3g vs %.3g "

@@ -120,6 +120,7 @@ struct Guard {
   struct Far {
     uint32_t resolution = 0;
     double q_reparam = -1, q_resize = -1;
+    double noise_floor = 0;  // eval's quarter-pixel noise floor at these views: closer q are a tie
   };
   std::optional<Far> far;
 };

@@ -161,7 +161,8 @@ json ReparamResult::to_json() const {
                        {"chosen", guard.chosen}};
     if (!guard.unseen.empty()) report["guard"]["unseen"] = guard.unseen;
     if (guard.far)
-      report["guard"]["far"] = {{"resolution", guard.far->resolution}, {"q_reparam", guard.far->q_reparam}, {"q_resize", guard.far->q_resize}};
+      report["guard"]["far"] = {{"resolution", guard.far->resolution}, {"q_reparam", guard.far->q_reparam}, {"q_resize", guard.far->q_resize},
+                                {"noise_floor", guard.far->noise_floor}};
   }
   else if (!guard.skipped.empty())
     report["guard"] = {{"skipped", guard.skipped}};

@@ -307,12 +307,15 @@ TEST_CASE("CLI: reparam of Fox at its defaults comes out lighter than it went in
   CHECK(report["textures"][0]["written"] == "png (8-bit palette)");
   CHECK(report["textures"][0]["bytes_vs_resize"].get<double>() <= 1.1);
   // From afar: both files scored at 256-pixel views too, on the summary line, and where
-  // the resize looks better there (Fox: q 0.0035 vs 0.0012) a warning says so.
+  // the resize looks better there by more than their noise floor (Fox: q 0.0035 vs 0.0012,
+  // floor 0.0002) a warning says so.
   REQUIRE(report["guard"]["far"].is_object());
   const auto& far = report["guard"]["far"];
   CHECK(far["resolution"] == 256);
   CHECK_THAT(r.out, Catch::Contains(", from afar "));
-  const bool loses = far["q_reparam"].get<double>() > far["q_resize"].get<double>();
+  // A difference within the far views' noise floor is sampling phase, not said.
+  CHECK(far["noise_floor"].get<double>() > 0);
+  const bool loses = far["q_reparam"].get<double>() > far["q_resize"].get<double>() + far["noise_floor"].get<double>();
   CHECK((r.err.find("from afar (the asset filling 256-pixel views") != std::string::npos) == loses);
 }
 

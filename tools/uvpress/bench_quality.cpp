@@ -85,7 +85,8 @@ void add_bench_quality(CLI::App& bench, Globals& g) {
         line["q_resize"] = r.guard.ran ? nlohmann::ordered_json(r.guard.q_resize) : nlohmann::ordered_json(nullptr);
         // The guard's views from afar (coarse mip levels): reparam's file and the resize.
         if (r.guard.far)
-          line["far"] = {{"resolution", r.guard.far->resolution}, {"q_reparam", r.guard.far->q_reparam}, {"q_resize", r.guard.far->q_resize}};
+          line["far"] = {{"resolution", r.guard.far->resolution}, {"q_reparam", r.guard.far->q_reparam}, {"q_resize", r.guard.far->q_resize},
+                         {"noise_floor", r.guard.far->noise_floor}};
         // reparam's guard and curve scored with this shading (its --score-shading).
         line["score_shading"] = r.scoring ? eval::to_string(r.scoring->shading) : "";
         const std::vector<std::pair<double, double>> curve = r.curve_cost_q();
