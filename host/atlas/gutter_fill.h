@@ -10,7 +10,15 @@
 //  1. Ring: empty texels whose nearest chart texel (exact Euclidean distance transform,
 //     ties to the first in scan order) is at most `ring` texels away in x and in y take
 //     that texel's value. Bilinear taps just outside a chart's footprint at level 0 read its
-//     edge colour, as with a nearest fill.
+//     edge colour, as with a nearest fill. After a bake with a surround (the source's own
+//     surroundings baked into half the gutter, RebakeOptions::surround) the ring is as wide
+//     as the surround (atlas::fill_ring): between charts a gutter apart the surrounds meet
+//     and nothing is left to fill, but free space next to a chart then continues the
+//     surround's outer texels, as the input continues its background, where the pull-push
+//     would put the mean of a block of chart and surround that coarse levels blend into the
+//     chart's edge. Fox at half its texels, from afar (eval's views with the fox filling
+//     256 pixels): q 0.00352 with a one-texel ring, 0.00259 with the surround's 8, the
+//     resize 0.00117; up close, Duck, CesiumMilkTruck and MultiUVTest within 0.3 %.
 //  2. Mip-consistent pull-push: the known texels (charts and ring) are averaged up a
 //     pyramid of 2x2 blocks aligned to the image's origin (a block's value: the mean of its
 //     non-empty children's values, colour channels in linear light when `srgb`), each block

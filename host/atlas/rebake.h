@@ -52,6 +52,12 @@ struct RebakeOptions {
   uint32_t surround = 0;
 };
 
+// The nearest-texel ring of the gutter fill after a bake with these options
+// (atlas::fill_gutter's `ring`): as wide as the surround, so that free space next to a
+// chart continues what lies at the surround's outer edge for as far again before the
+// pull-push takes over; one texel without a surround.
+inline uint32_t fill_ring(const RebakeOptions& options) { return options.surround > 1 ? options.surround : 1; }
+
 struct RebakeStats {
   size_t covered = 0;            // texels owned by a triangle
   size_t triangles = 0;          // non-degenerate triangles rasterized

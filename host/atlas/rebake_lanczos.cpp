@@ -289,7 +289,7 @@ Image rebake_lanczos(const Image& source, const std::vector<RebakeMesh>& meshes,
   Image out = area;
   std::vector<uint8_t> covered, kept;
   lanczos_pass(source, plan, options, out, covered, kept);
-  if (options.fill_gutter) fill_gutter(out, covered, options.role == RebakeRole::Color);
+  if (options.fill_gutter) fill_gutter(out, covered, options.role == RebakeRole::Color, fill_ring(options));
   if (baked) {
     baked->resize(covered.size(), 0);
     for (size_t i = 0; i < covered.size(); ++i) (*baked)[i] |= covered[i];
@@ -320,7 +320,7 @@ Image rebake_lanczos(const Image& source, const std::vector<RebakeMesh>& meshes,
   const size_t C = source.channels;
   for (size_t i = 0; i < kept.size(); ++i)
     if (kept[i]) std::copy_n(&area.pixels[i * C], C, &out.pixels[i * C]);
-  fill_gutter(out, covered, options.role == RebakeRole::Color);
+  fill_gutter(out, covered, options.role == RebakeRole::Color, fill_ring(options));
   if (stats) {
     *stats = std::move(area_stats);
     for (size_t i = 0; i < covered.size(); ++i) stats->coverage[i] |= covered[i];

@@ -397,10 +397,10 @@ Image rebake_least_squares(const Image& source, const std::vector<RebakeMesh>& m
   }
   if (opt.fill_gutter) {
     // Texels the start covered but no sample reached (slivers) keep their value, as do the
-    // texels `keep` marks (a surround).
+    // texels `keep` marks (a surround, which the fill then continues: atlas::fill_ring).
     for (size_t t = 0; t < solved.size(); ++t)
       if (plan.owner[t] != engine::kRebakeNoOwner || (keep && (*keep)[t])) solved[t] = 1;
-    fill_gutter(out, solved, opt.role == RebakeRole::Color);
+    fill_gutter(out, solved, opt.role == RebakeRole::Color, keep ? fill_ring(opt) : 1);
   }
   st.solved = true;
   return finish(std::move(out));

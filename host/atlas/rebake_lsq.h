@@ -47,8 +47,9 @@ struct LsqBakeStats {
 // texel that is not solved for). Returns an image like area_baked (same size, channels,
 // bits). `keep`, when given (width * height, as rebake_lanczos's `baked` with a surround):
 // texels marked 1 that are not solved for keep area_baked's values through the gutter
-// refill, so a surround (RebakeOptions::surround) survives the solve; without it, every
-// texel past the solved ring is refilled from the solved texels. Normal maps get area_baked
+// refill, so a surround (RebakeOptions::surround) survives the solve, and the fill continues
+// it as rebake_lanczos's does (atlas::fill_ring); without it, every texel past the solved
+// ring is refilled from the solved texels (a one-texel ring). Normal maps get area_baked
 // back (stats->solved false). Throws std::invalid_argument when area_baked (or keep) does
 // not match options and source.
 Image rebake_least_squares(const Image& source, const std::vector<RebakeMesh>& meshes, const RebakeOptions& options,

@@ -897,7 +897,7 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
           if (unit_exact[u]) copied += atlas::copy_chart_texels(resized, shapes[u], packing, u, copy_ring, baked, &known);
         // The gutter filled again from what is now at the charts' edges: the copies (and
         // their ring of the source's own neighbours), not the bake they replaced.
-        if (copied) atlas::fill_gutter(baked, known, ro.role == atlas::RebakeRole::Color);
+        if (copied) atlas::fill_gutter(baked, known, ro.role == atlas::RebakeRole::Color, atlas::fill_ring(ro));
       }
       exact_texels += copied;
       const std::vector<uint8_t> old_bytes = file.image_bytes[size_t(i)];

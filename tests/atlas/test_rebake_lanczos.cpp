@@ -150,7 +150,9 @@ TEST_CASE("rebake_lanczos: identity and quarter turns at the same size copy texe
 TEST_CASE("rebake_lanczos: surround bakes what the source has around a chart into the gutter next to it", "[atlas]") {
   // A dark chart (the square [16, 48)^2 of a 64^2 source) on a white background, moved to
   // the middle of a 64^2 atlas at the same density. Next to its edge the gutter must show
-  // the source's white up to `surround` texels, then the fill (the chart's own dark mean).
+  // the source's white up to `surround` texels; the fill then continues that white for as
+  // far again (atlas::fill_ring), where a one-texel ring and the pull-push would put the
+  // chart's dark (its block means).
   const test::DarkChartOnWhite chart;
   const Image& src = chart.source;
   const atlas::RebakeMesh mesh = chart.mesh();
@@ -172,8 +174,12 @@ TEST_CASE("rebake_lanczos: surround bakes what the source has around a chart int
     }
     CHECK(kept.at(30, y, 0) == Approx(0.1f).margin(1e-4));  // the chart itself is unchanged
     CHECK(kept.at(30, y, 0) == plain.at(30, y, 0));
-    CHECK(kept.at(58, y, 0) < 0.95f);  // past the surround: filled, not baked
-    CHECK(baked[size_t(y) * 64 + 58] == 0);
+    for (uint32_t x : {11u, 12u, 13u, 14u, 55u, 56u, 57u, 58u}) {  // past the surround: filled, not baked
+      INFO("x " << x << " y " << y);
+      CHECK(kept.at(x, y, 0) == kept.at(x < 32 ? 15 : 54, y, 0));  // the surround's outer texel, continued
+      CHECK(baked[size_t(y) * 64 + x] == 0);
+    }
+    CHECK(plain.at(55, y, 0) < 0.2f);  // without a surround, a one-texel ring, then the chart's dark
   }
 }
 

@@ -236,7 +236,7 @@ TEST_CASE("rebake_lsq: a Lanczos start's surround survives the solve where `keep
   // the first ring (its targets, footprint filters past the edge, see white there too); the
   // gutter past it is refilled from the solved texels, which near the image origin's 4x4
   // blocks mixes in the chart's dark at x 15 (0.63). With `keep` every surround texel keeps
-  // the Lanczos start's white.
+  // the Lanczos start's white, and the fill continues it for as far again.
   const test::DarkChartOnWhite chart;
   const Image& src = chart.source;
   const atlas::RebakeMesh mesh = chart.mesh();
@@ -260,7 +260,8 @@ TEST_CASE("rebake_lsq: a Lanczos start's surround survives the solve where `keep
     CHECK(plain.at(15, y, 0) < 0.9f);  // refilled: not the source's white
     CHECK(kept.at(30, y, 0) == Approx(0.1f).margin(2e-3));  // the chart's texels are solved the same
     CHECK(kept.at(30, y, 0) == plain.at(30, y, 0));
-    CHECK(kept.at(58, y, 0) == plain.at(58, y, 0));  // past the surround: the same refill
+    CHECK(kept.at(58, y, 0) == kept.at(54, y, 0));  // past the surround: its outer texels continued
+    CHECK(plain.at(58, y, 0) < 0.9f);                 // no surround kept: refilled from the solved texels
   }
   std::vector<uint8_t> wrong(7, 1);
   CHECK_THROWS_AS(atlas::rebake_least_squares(src, {mesh}, o, start, nullptr, {}, &wrong), std::invalid_argument);
