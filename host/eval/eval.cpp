@@ -79,6 +79,16 @@
 //   each curve point carries `codec_bytes`, its levels' blocks). The reference views and
 //   the noise floor stay uncompressed. Lit: data maps (normal, occlusion, metallic-roughness)
 //   go through astcenc's linear profile, colour maps through sRGB.
+// - Cost axis (`cost_axis`, `--cost-axis bytes`): the savings compare costs in bytes
+//   instead of image texels. Every curve point's driving texture (as the views sample it:
+//   its colour, or its grey when the reference image is grey; an alpha channel is not
+//   counted) is encoded as the reference's driving image is (io::encode_settings_of: PNG,
+//   paletted or not, or JPEG at its estimated quality and subsampling), with the strongest
+//   encoder, and its bytes relative to the reference image's bytes in the file are the
+//   cost (`bytes`, `bytes_ratio`); an as-written file counts its own image's bytes. A PNG's
+//   bytes follow its content, not its texels (flat art halved costs more than half), so
+//   the two axes can rank layouts differently. Not with a codec, whose fixed-rate blocks
+//   go with texels.
 // - Shading (`shading`, report: shading "unlit" | "lit", shading_requested, and
 //   shading_warning when auto fell back): unlit, q reads the driving texture's luminance;
 //   lit (lit.h), q reads the luminance of the views lit by a fixed rig through the asset's
@@ -96,6 +106,7 @@
 
 #include "core/error.h"
 #include "core/stopwatch.h"
+#include "io/image_io.h"
 #include "layout.h"
 #include "lit.h"
 #include "resize.h"
@@ -173,6 +184,12 @@ const char* to_string(TextureFilter filter) {
 std::optional<TextureFilter> parse_texture_filter(std::string_view text) {
   if (text == "trilinear") return TextureFilter::Trilinear;
   if (text == "bilinear") return TextureFilter::Bilinear;
+  return std::nullopt;
+}
+
+std::optional<CostAxis> parse_cost_axis(std::string_view text) {
+  if (text == "texels") return CostAxis::Texels;
+  if (text == "bytes") return CostAxis::Bytes;
   return std::nullopt;
 }
 
@@ -1251,9 +1268,27 @@ EvalResult evaluate(const io::GltfFile& reference, const std::vector<LayoutInput
                     const EvalOptions& o, EvalArtifacts* artifacts, const Progress& progress) {
   const Stopwatch t_start;
   Timing timing;
+  const bool bytes_axis = o.cost_axis == CostAxis::Bytes;
+  if (bytes_axis && o.codec)
+    throw InputError(reference.path, "--cost-axis bytes counts the input's own codec (PNG or JPEG); with --codec the cost "
+                                     "is the codec's fixed-rate blocks, which go with texels: use --cost-axis texels");
   const Setup s = set_up(reference, engine, o, timing);
   const LayoutMesh& ref = s.ref;
   const auto& cameras = s.cameras;
+  // The bytes axis (see "Cost axis" above): textures encoded as the reference's image is.
+  const std::vector<uint8_t>& reference_bytes = reference.image_bytes.at(size_t(ref.image));
+  const io::EncodeSettings encoding = io::encode_settings_of(reference_bytes);
+  const bool grey = bytes_axis && io::decode_image(reference_bytes, reference.path).channels <= 2;
+  auto encoded_bytes = [&](const Image& rgb) -> uint64_t {
+    Image tex = rgb;
+    tex.bits = ref.full.bits;
+    if (grey) {
+      tex.channels = 1;
+      for (size_t i = 0; i < size_t(tex.width) * tex.height; ++i) tex.pixels[i] = rgb.pixels[3 * i];
+      tex.pixels.resize(size_t(tex.width) * tex.height);
+    }
+    return io::encode_image(tex, encoding).size();
+  };
 
   // The layouts with their full textures and aspects.
   struct Entry {
@@ -1264,6 +1299,7 @@ EvalResult evaluate(const io::GltfFile& reference, const std::vector<LayoutInput
     bool scored_as_written = false;
     Scored as_written;
     uint32_t written_size[2] = {0, 0};  // the file's own texture (full is re-baked later)
+    uint64_t written_bytes = 0;         // ... and its encoded bytes
     std::optional<std::string> rebake;  // how the full texture was re-baked
     nlohmann::ordered_json isometric;  // the isometric layout's flatten summary
   };
@@ -1319,6 +1355,7 @@ EvalResult evaluate(const io::GltfFile& reference, const std::vector<LayoutInput
     e.as_written = score_own(engine, s, e.mesh, timing);
     e.scored_as_written = true;
     e.written_size[0] = e.mesh.full.width, e.written_size[1] = e.mesh.full.height;
+    e.written_bytes = other.file->image_bytes.at(size_t(e.mesh.image)).size();
     if (detail::same_triangles(ref, e.mesh, 1e-5 * s.radius)) {
       rebake_into(e);
     } else {
@@ -1369,7 +1406,9 @@ EvalResult evaluate(const io::GltfFile& reference, const std::vector<LayoutInput
   if (s.lit && o.noise_floor) r.noise_floor_unlit = s.noise_floor_unlit, r.noise_floor_lit = s.noise_floor_lit;
   r.triangles = ref.indices.size() / 3;
   r.reference = {reference.path, ref.image,     ref.full.width,    ref.full.height,
-                 ref.uv_area,    s.image_texels, s.chart_texels};
+                 ref.uv_area,    s.image_texels, s.chart_texels, reference_bytes.size(),
+                 bytes_axis ? io::describe(encoding) : std::string()};
+  r.cost_axis = o.cost_axis;
   r.codec = o.codec;
   r.cost_grid = o.cost_grid;
   r.contact_c_r = contact;
@@ -1388,12 +1427,14 @@ EvalResult evaluate(const io::GltfFile& reference, const std::vector<LayoutInput
     // gigabytes for a 2048-px asset, and lit curves render each cost on its own anyway).
     const size_t group = s.lit ? 1 : o.cost_grid.size();
     std::vector<Scores> scores;
+    std::vector<uint64_t> bytes(o.cost_grid.size(), 0);
     for (size_t first = 0; first < o.cost_grid.size(); first += group) {
       std::vector<LayoutTextures> textures;
       for (size_t i = first; i < std::min(o.cost_grid.size(), first + group); ++i) {
         auto [W, H] = size_at(o.cost_grid[i], s.image_texels, aspect);
         const Stopwatch t0;
         const Image tex = resize.colour(m.full, W, H);
+        if (bytes_axis) bytes[i] = encoded_bytes(tex);
         timing.textures += t0.seconds();
         textures.push_back(layout_textures(s, m, tex, &resize, true, timing));
       }
@@ -1415,6 +1456,7 @@ EvalResult evaluate(const io::GltfFile& reference, const std::vector<LayoutInput
       if (s.lit) p.q_unlit = sc.q_unlit, p.q_lit = sc.q_lit;
       p.q_views = std::move(sc.views);
       if (s.codec) p.codec_bytes = codec_bytes(s, W, H);
+      if (bytes_axis) p.bytes = bytes[i], p.bytes_ratio = double(bytes[i]) / double(reference_bytes.size());
       c.mean_log_q += std::log(std::max(p.q, 1e-9)) / double(o.cost_grid.size());  // q = 0: a perfect copy
       c.points.push_back(std::move(p));
     }
@@ -1462,6 +1504,7 @@ EvalResult evaluate(const io::GltfFile& reference, const std::vector<LayoutInput
       w.q_unlit = e.as_written.q_unlit, w.q_lit = e.as_written.q_lit;
       w.width = e.written_size[0], w.height = e.written_size[1];
       w.q_views = std::move(e.as_written.q_views);
+      if (bytes_axis) w.bytes = e.written_bytes, w.bytes_ratio = double(e.written_bytes) / double(reference_bytes.size());
       L.as_written = std::move(w);
     }
     L.curve = std::move(curve.points);
@@ -1485,7 +1528,8 @@ EvalResult evaluate(const io::GltfFile& reference, const std::vector<LayoutInput
     for (size_t a = 0; a < layouts.size(); ++a) {
       if (a == b || (b != 0 && a == 0)) continue;
       r.savings.push_back({r.layouts[a].name, r.layouts[b].name,
-                           pixel_ratio_at_equal_q(r.layouts[a].cost_q(), r.layouts[b].cost_q(), s.resolution.noise_floor)});
+                           pixel_ratio_at_equal_q(r.layouts[a].cost_q(o.cost_axis), r.layouts[b].cost_q(o.cost_axis),
+                                                  s.resolution.noise_floor)});
     }
   r.seconds = {timing.textures, timing.render, timing.gmsd, timing.shading, t_start.seconds()};
   if (progress) progress("done", steps, steps);

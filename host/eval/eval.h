@@ -34,6 +34,8 @@ namespace uvpress::eval {
 
 // How the views sample textures (eval.cpp, "Renders"; TextureFilter is in result.h).
 std::optional<TextureFilter> parse_texture_filter(std::string_view text);
+// "texels" | "bytes" (result.h, CostAxis).
+std::optional<CostAxis> parse_cost_axis(std::string_view text);
 
 constexpr uint32_t kMaxResolution = 4096;  // views of more than 1024 px are tiled
 
@@ -53,6 +55,7 @@ struct EvalOptions {
   bool artifacts = true;      // keep what write_html_report needs (contact sheets, UV plots)
   double fov_degrees = 30;
   std::optional<io::AstcOptions> codec;  // q after ASTC compression (eval.cpp, "Codec"); none: uncompressed
+  CostAxis cost_axis = CostAxis::Texels;  // what the savings compare at equal q (eval.cpp, "Cost axis")
   Shading shading = Shading::Auto;       // which q is q (eval.cpp, "Shading")
   // The image whose primitives the views draw (glTF image index); -1: the base colour
   // sampled by the most triangles (layout.h, extract_layout). Reference and candidates alike.

@@ -65,12 +65,14 @@ std::string plot_svg(const EvalResult& report, std::string* why) {
     return "";
   }
   const fs::path tmp = tmpl;
+  const bool bytes = report.cost_axis == CostAxis::Bytes;
   std::ostringstream script;
   script << "set terminal svg size 760,480 dynamic enhanced font 'sans,12' background rgb 'white'\n"
          << "set output '" << (tmp / "plot.svg").string() << "'\n"
-         << "set title 'Perceptual loss against relative pixel cost (" << report.views << " views, "
-         << report.resolution.resolution << "^2 px)'\n"
-         << "set xlabel 'relative cost c_r'\nset ylabel 'q_r (mean GMSD, log scale)'\n"
+         << "set title 'Perceptual loss against relative " << (bytes ? "bytes" : "pixel cost") << " (" << report.views
+         << " views, " << report.resolution.resolution << "^2 px)'\n"
+         << (bytes ? "set xlabel 'bytes relative to the input image'\n" : "set xlabel 'relative cost c_r'\n")
+         << "set ylabel 'q_r (mean GMSD, log scale)'\n"
          << "set logscale y\nset grid\nset key top right\nset format y '10^{%L}'\n";
   std::string plot = "plot ";
   size_t k = 0;
@@ -78,7 +80,7 @@ std::string plot_svg(const EvalResult& report, std::string* why) {
     const std::string data = (tmp / ("l" + std::to_string(k) + ".dat")).string();
     std::ofstream f(data);
     for (const auto& p : L.curve)
-      if (p.q > 0) f << p.c_r_actual << " " << p.q << "\n";
+      if (p.q > 0) f << (bytes ? p.bytes_ratio : p.c_r_actual) << " " << p.q << "\n";
     std::string name = L.name;
     for (char& c : name)
       if (c == '\'' || c == '_') c = ' ';
@@ -89,7 +91,7 @@ std::string plot_svg(const EvalResult& report, std::string* why) {
     if (L.as_written && L.as_written->q > 0) {
       const std::string point = (tmp / ("w" + std::to_string(k) + ".dat")).string();
       std::ofstream w(point);
-      w << L.as_written->c_r << " " << L.as_written->q << "\n";
+      w << (bytes ? L.as_written->bytes_ratio : L.as_written->c_r) << " " << L.as_written->q << "\n";
       plot += ", '" + point + "' using 1:2 with points" + lt + " pt 5 ps 2 title '" + name + " as written'";
     }
     ++k;
@@ -162,14 +164,18 @@ void write_html_report(const EvalResult& report, const EvalArtifacts& art, const
     << (!report.shading_warning.empty() ? " &mdash; " + escape(report.shading_warning) : "")
     << "; the contact sheets show the base colour.</p>\n";
 
-  h << "<h2>Pixel savings at equal quality</h2>\n";
+  const bool bytes = report.cost_axis == CostAxis::Bytes;
+  if (bytes)
+    h << "<p>Cost axis: <b>bytes</b> &mdash; every texture encoded as the input's image is (" << escape(report.reference.encoding)
+      << "), relative to that image's " << report.reference.image_bytes << " bytes; each cell's tooltip has its bytes.</p>\n";
+  h << "<h2>" << (bytes ? "Byte" : "Pixel") << " savings at equal quality</h2>\n";
   bool any = false;
   for (const auto& row : report.savings) {
     const Savings& s = row.savings;
     if (!s.points) continue;
     const double r = s.ratio;
     h << "<p class=\"headline\"><b>" << escape(row.layout) << "</b> reaches the quality of <b>"
-      << escape(row.vs) << "</b> with <b>" << fmt(100 * r, "%.1f") << "%</b> of its pixels ("
+      << escape(row.vs) << "</b> with <b>" << fmt(100 * r, "%.1f") << "%</b> of its " << (bytes ? "bytes" : "pixels") << " ("
       << (r <= 1 ? fmt(100 * (1 - r), "%.1f") + "% fewer" : fmt(100 * (r - 1), "%.1f") + "% more")
       << "), over q &isin; [" << fmt(s.q_lo) << ", " << fmt(s.q_hi)
       << "], " << s.points << " levels.</p>\n";
@@ -189,10 +195,12 @@ void write_html_report(const EvalResult& report, const EvalArtifacts& art, const
       << L.full_size[0] << "&times;" << L.full_size[1] << "</td>";
     for (const auto& p : L.curve)
       h << "<td title=\"" << p.width << "x" << p.height << ", c_r " << fmt(p.c_r_actual) << ", chart c_r "
-        << fmt(p.c_r_chart) << (report.lit ? ", unlit q " + fmt(p.q_unlit) : std::string()) << "\">" << fmt(p.q)
+        << fmt(p.c_r_chart) << (p.bytes ? ", " + std::to_string(*p.bytes) + " bytes" : std::string())
+        << (report.lit ? ", unlit q " + fmt(p.q_unlit) : std::string()) << "\">" << fmt(p.q)
         << "</td>";
     if (L.as_written)
-      h << "<td>q " << fmt(L.as_written->q) << " at c<sub>r</sub> " << fmt(L.as_written->c_r, "%.3f") << "</td>";
+      h << "<td>q " << fmt(L.as_written->q) << " at c<sub>r</sub> " << fmt(L.as_written->c_r, "%.3f")
+        << (L.as_written->bytes ? ", " + fmt(L.as_written->bytes_ratio, "%.3f") + " of the bytes" : std::string()) << "</td>";
     else
       h << "<td></td>";
     h << "</tr>\n";

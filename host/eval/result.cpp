@@ -15,6 +15,7 @@ json point_json(const CurvePoint& p, bool lit) {
   if (lit) j["q_unlit"] = p.q_unlit, j["q_lit"] = p.q_lit;
   j["q_views"] = p.q_views;
   if (p.codec_bytes) j["codec_bytes"] = *p.codec_bytes;
+  if (p.bytes) j["bytes"] = *p.bytes, j["bytes_ratio"] = p.bytes_ratio;
   return j;
 }
 
@@ -22,6 +23,7 @@ json as_written_json(const CurvePoint& p, bool lit) {
   json j = {{"c_r", p.c_r}, {"c_r_chart", p.c_r_chart}, {"q", p.q}};
   if (lit) j["q_unlit"] = p.q_unlit, j["q_lit"] = p.q_lit;
   j["width"] = p.width, j["height"] = p.height;
+  if (p.bytes) j["bytes"] = *p.bytes, j["bytes_ratio"] = p.bytes_ratio;
   j["q_views"] = p.q_views;
   return j;
 }
@@ -46,16 +48,17 @@ json layout_json(const LayoutResult& l, bool lit) {
   return j;
 }
 
-json savings_json(const SavingsRow& row) {
+json savings_json(const SavingsRow& row, CostAxis axis) {
   json j = {{"layout", row.layout}, {"vs", row.vs}};
   const Savings& s = row.savings;
+  const std::string unit = axis == CostAxis::Bytes ? "bytes" : "pixel";
   if (s.points) {
-    j["pixel_ratio_at_equal_q"] = s.ratio;
-    j["pixel_savings"] = 1 - s.ratio;
+    j[unit + "_ratio_at_equal_q"] = s.ratio;
+    j[unit + "_savings"] = 1 - s.ratio;
     j["q_range"] = {s.q_lo, s.q_hi};
   } else {
-    j["pixel_ratio_at_equal_q"] = nullptr;
-    j["pixel_savings"] = nullptr;
+    j[unit + "_ratio_at_equal_q"] = nullptr;
+    j[unit + "_savings"] = nullptr;
     j["q_range"] = nullptr;
   }
   j["points"] = s.points;
@@ -65,9 +68,11 @@ json savings_json(const SavingsRow& row) {
 
 }  // namespace
 
-std::vector<std::pair<double, double>> LayoutResult::cost_q() const {
+const char* to_string(CostAxis axis) { return axis == CostAxis::Bytes ? "bytes" : "texels"; }
+
+std::vector<std::pair<double, double>> LayoutResult::cost_q(CostAxis axis) const {
   std::vector<std::pair<double, double>> cq;
-  for (const auto& p : curve) cq.push_back({p.c_r_actual, p.q});
+  for (const auto& p : curve) cq.push_back({axis == CostAxis::Bytes ? p.bytes_ratio : p.c_r_actual, p.q});
   std::sort(cq.begin(), cq.end());
   return cq;
 }
@@ -110,8 +115,10 @@ json EvalResult::to_json() const {
   report["reference"] = {{"file", reference.file},       {"image", reference.image},
                          {"width", reference.width},     {"height", reference.height},
                          {"uv_area", reference.uv_area}, {"image_texels", reference.image_texels},
-                         {"chart_texels", reference.chart_texels}};
+                         {"chart_texels", reference.chart_texels}, {"image_bytes", reference.image_bytes}};
+  if (!reference.encoding.empty()) report["reference"]["encoding"] = reference.encoding;
   report["cost_measure"] = "image_texels";
+  report["cost_axis"] = to_string(cost_axis);
   if (codec)
     report["codec"] = {{"name", "astc-" + io::block_name(*codec)},
                        {"quality", io::to_string(codec->quality)},
@@ -124,7 +131,7 @@ json EvalResult::to_json() const {
   report["layouts"] = json::array();
   for (const auto& l : layouts) report["layouts"].push_back(layout_json(l, lit));
   report["savings"] = json::array();
-  for (const auto& row : savings) report["savings"].push_back(savings_json(row));
+  for (const auto& row : savings) report["savings"].push_back(savings_json(row, cost_axis));
   report["seconds"] = {{"textures", seconds.textures},
                        {"render", seconds.render},
                        {"gmsd", seconds.gmsd},

@@ -24,6 +24,12 @@ namespace uvpress::eval {
 enum class TextureFilter { Bilinear, Trilinear };
 const char* to_string(TextureFilter filter);
 
+// What the curves' cost counts: image texels (W x H of the driving texture, relative to the
+// reference's), or bytes (the driving texture encoded as the reference's image is: its
+// codec, palette, JPEG quality and subsampling, relative to the reference image's bytes).
+enum class CostAxis { Texels, Bytes };
+const char* to_string(CostAxis axis);
+
 // The view resolution an evaluation chose and what it resolves (eval.h, "Resolution").
 struct ViewResolution {
   uint32_t resolution = 512;  // pixels a side of the whole view
@@ -47,6 +53,10 @@ struct CurvePoint {
   double q_unlit = 0, q_lit = 0;  // both, when lit
   std::vector<float> q_views;     // GMSD per view (q is their mean)
   std::optional<uint64_t> codec_bytes;  // with a codec: the mip chain's compressed blocks
+  // CostAxis::Bytes: the texture's encoded bytes (as written: the file's own image), and
+  // those relative to the reference image's bytes (the cost the savings compare).
+  std::optional<uint64_t> bytes;
+  double bytes_ratio = 0;
 };
 
 // One layout's curve and where it came from.
@@ -66,8 +76,9 @@ struct LayoutResult {
   std::optional<CurvePoint> as_written;
   std::vector<CurvePoint> curve;  // by the grid's order (increasing c_r)
 
-  // (c_r_actual, q) by increasing cost: what eval's savings compare.
-  std::vector<std::pair<double, double>> cost_q() const;
+  // (c_r_actual, q), or (bytes_ratio, q) on the bytes axis, by increasing cost: what eval's
+  // savings compare.
+  std::vector<std::pair<double, double>> cost_q(CostAxis axis = CostAxis::Texels) const;
   // (c_r, q) at the grid's costs, in its order: what curves of written costs (reparam's
   // `curve`) are compared with.
   std::vector<std::pair<double, double>> grid_q() const;
@@ -109,7 +120,10 @@ struct EvalResult {
     int image = -1;
     uint32_t width = 0, height = 0;
     double uv_area = 0, image_texels = 0, chart_texels = 0;
+    uint64_t image_bytes = 0;  // the driving image's encoded bytes in the file
+    std::string encoding;      // CostAxis::Bytes: how every texture is encoded (io::describe)
   } reference;
+  CostAxis cost_axis = CostAxis::Texels;
   std::optional<io::AstcOptions> codec;
   std::vector<double> cost_grid;
   double contact_c_r = 0;

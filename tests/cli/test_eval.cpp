@@ -114,3 +114,37 @@ TEST_CASE("uvpress eval --shading: lit by default on a normal-mapped asset, unli
                         "' --score-shading glossy");
   CHECK(r.exit_code == 2);
 }
+
+TEST_CASE("uvpress eval --cost-axis bytes: savings and as-written costs in bytes, bad values are usage errors",
+          "[eval][cli]") {
+  test::Scratch dir("eval-bytes");
+  io::GltfFile small = pipeline::make_demo_asset({16, 128});
+  io::save_gltf(small, (dir / "small.glb").string());
+  io::save_gltf(small, (dir / "other.glb").string());
+  const std::string files = " '" + (dir / "small.glb").string() + "' '" + (dir / "other.glb").string() + "'";
+  auto r = test::run_uvpress("eval" + files + " --cost-axis bytes --device cpu --resolution 64 --cost-grid 0.5,1 --report '" +
+                             (dir / "r.json").string() + "' --html '" + (dir / "html").string() + "'");
+  REQUIRE(r.exit_code == 0);
+  INFO(r.out << r.err);
+  CHECK(r.out.find("savings in bytes, encoded as png") != std::string::npos);
+  CHECK(r.out.find("of the input's bytes)") != std::string::npos);  // the file as written
+  std::ifstream in((dir / "r.json").string());
+  const auto report = nlohmann::json::parse(in);
+  CHECK(report["cost_axis"] == "bytes");
+  const uint64_t image_bytes = report["reference"]["image_bytes"];
+  CHECK(image_bytes == small.image_bytes[0].size());
+  // The other file is the input itself: as written, exactly the input's bytes.
+  CHECK(report["layouts"][1]["as_written"]["bytes"] == image_bytes);
+  CHECK(report["layouts"][1]["as_written"]["bytes_ratio"] == 1.0);
+  for (const auto& L : report["layouts"])
+    for (const auto& p : L["curve"]) CHECK(p["bytes_ratio"].get<double>() == Approx(p["bytes"].get<double>() / double(image_bytes)));
+  std::ifstream html((dir / "html" / "index.html").string());
+  std::stringstream page;
+  page << html.rdbuf();
+  CHECK(page.str().find("Byte savings at equal quality") != std::string::npos);
+  r = test::run_uvpress("eval" + files + " --cost-axis pixels --device cpu");
+  CHECK(r.exit_code == 2);
+  r = test::run_uvpress("eval" + files + " --cost-axis bytes --codec astc-6x6 --device cpu --resolution 32 --cost-grid 1");
+  CHECK(r.exit_code != 0);
+  CHECK(r.err.find("--cost-axis bytes") != std::string::npos);
+}

@@ -482,6 +482,85 @@ TEST_CASE("eval: the isometric layout and another file of the same mesh, report 
   CHECK(art.reference_contact.width == 5 * 32);
 }
 
+TEST_CASE("eval --cost-axis bytes: each point's texture encoded as the input's image is, savings in bytes", "[eval]") {
+  io::GltfFile file = pipeline::make_demo_asset({16, 128});
+  auto cpu = engine::make_cpu_engine({});
+  eval::EvalOptions o;
+  o.resolution = 64;
+  o.cost_grid = {0.25, 1.0};
+  o.artifacts = false;
+  o.cost_axis = eval::CostAxis::Bytes;
+  const std::vector<uint8_t>& in_bytes = file.image_bytes[0];
+  const io::EncodeSettings settings = io::encode_settings_of(in_bytes);
+  const Image img = io::decode_image(in_bytes, "demo");
+  REQUIRE(img.channels == 3);
+  // A user's file: the texture halved a side, written as the input was.
+  io::GltfFile half = file;
+  half.path = "half.glb";
+  half.image_bytes[0] = io::encode_image(eval::resize_lanczos3(img, 64, 64, false), settings);
+  const eval::EvalResult r = eval::evaluate(file, {{"half", &half}}, *cpu, o);
+  CHECK(r.cost_axis == eval::CostAxis::Bytes);
+  CHECK(r.reference.image_bytes == in_bytes.size());
+  CHECK(r.reference.encoding == io::describe(settings));
+  // The input's points: its texture resized as the curve resizes it, encoded with the
+  // input's settings, byte for byte the size of that encoding.
+  const bool linear = r.input_resize == "lanczos3-linear";
+  const auto& curve = r.layouts[0].curve;
+  REQUIRE(curve.size() == 2);
+  for (const auto& p : curve) {
+    INFO("c_r " << p.c_r);
+    Image resized = eval::resize_lanczos3(img, p.width, p.height, linear);
+    resized.bits = img.bits;
+    REQUIRE(p.bytes);
+    CHECK(*p.bytes == io::encode_image(resized, settings).size());
+    CHECK(p.bytes_ratio == Approx(double(*p.bytes) / double(in_bytes.size())));
+  }
+  CHECK(*curve[0].bytes < *curve[1].bytes);  // a quarter of the texels, fewer bytes
+  // The file as written counts its own image's bytes.
+  const auto& other = r.layouts[1];
+  REQUIRE(other.as_written);
+  REQUIRE(other.as_written->bytes);
+  CHECK(*other.as_written->bytes == half.image_bytes[0].size());
+  CHECK(other.as_written->bytes_ratio == Approx(double(half.image_bytes[0].size()) / double(in_bytes.size())));
+  // The savings compare the curves at equal q along bytes, not texels.
+  REQUIRE(r.savings.size() == 1);
+  const eval::Savings by_bytes = eval::pixel_ratio_at_equal_q(other.cost_q(eval::CostAxis::Bytes),
+                                                              r.layouts[0].cost_q(eval::CostAxis::Bytes), r.noise_floor());
+  CHECK(r.savings[0].savings.points == by_bytes.points);
+  if (by_bytes.points) CHECK(r.savings[0].savings.ratio == Approx(by_bytes.ratio));
+  const auto report = r.to_json();
+  CHECK(report["cost_axis"] == "bytes");
+  CHECK(report["reference"]["image_bytes"] == in_bytes.size());
+  CHECK(report["savings"][0].contains("bytes_ratio_at_equal_q"));
+  CHECK(!report["savings"][0].contains("pixel_ratio_at_equal_q"));
+  CHECK(report["layouts"][0]["curve"][0]["bytes"] == *curve[0].bytes);
+  // A JPEG input: its points are JPEGs at its quality and subsampling, not PNGs.
+  io::GltfFile jpeg = file;
+  io::EncodeSettings q70;
+  q70.format = "jpeg", q70.jpeg_quality = 70, q70.jpeg_h_sampling = 1, q70.jpeg_v_sampling = 1;
+  jpeg.image_bytes[0] = io::encode_image(img, q70);
+  jpeg.model.images[0].mimeType = "image/jpeg";
+  const Image jimg = io::decode_image(jpeg.image_bytes[0], "demo.jpg");
+  const eval::EvalResult j = eval::evaluate(jpeg, {}, *cpu, o);
+  CHECK(j.reference.encoding == io::describe(io::encode_settings_of(jpeg.image_bytes[0])));
+  const auto& jp = j.layouts[0].curve[0];
+  Image jresized = eval::resize_lanczos3(jimg, jp.width, jp.height, j.input_resize == "lanczos3-linear");
+  jresized.bits = jimg.bits;
+  REQUIRE(jp.bytes);
+  CHECK(*jp.bytes == io::encode_image(jresized, io::encode_settings_of(jpeg.image_bytes[0])).size());
+  CHECK(*jp.bytes < io::encode_image(jresized, settings).size() / 2);  // far below the PNG's
+  // The texel axis carries no bytes; a codec's fixed-rate blocks go with texels, so the two
+  // together are refused.
+  o.cost_axis = eval::CostAxis::Texels;
+  const eval::EvalResult t = eval::evaluate(file, {}, *cpu, o);
+  CHECK(!t.layouts[0].curve[0].bytes);
+  CHECK(!t.to_json()["layouts"][0]["curve"][0].contains("bytes"));
+  CHECK(t.to_json()["cost_axis"] == "texels");
+  o.cost_axis = eval::CostAxis::Bytes;
+  o.codec = io::AstcOptions{6, 6, io::AstcQuality::Fastest};
+  CHECK_THROWS_AS(eval::evaluate(file, {}, *cpu, o), InputError);
+}
+
 TEST_CASE("eval: a file of another mesh is an input error", "[eval]") {
   io::GltfFile a = pipeline::make_demo_asset({16, 64}), b = pipeline::make_demo_asset({8, 64});
   b.path = "other.glb";

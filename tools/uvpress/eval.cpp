@@ -1,6 +1,7 @@
 // uvpress eval REFERENCE [OTHER ...] [--flatten] [--paper-baseline] [--cost-grid ...]
-//   [--resolution auto|N] [--filter trilinear|bilinear] [--shading auto|unlit|lit] [--report FILE.json] [--html DIR]: perceptual quality against pixel
-// cost (image texels) over 20 dodecahedron views (seed paper 001, section 5.1) for the
+//   [--resolution auto|N] [--filter trilinear|bilinear] [--shading auto|unlit|lit] [--cost-axis texels|bytes]
+//   [--report FILE.json] [--html DIR]: perceptual quality against pixel
+// cost (image texels, or encoded bytes) over 20 dodecahedron views (seed paper 001, section 5.1) for the
 // reference's layout (resized as users do), each other glTF of the same mesh (and as
 // written), and the isometric (flatten) layout; see host/eval/eval.h.
 #include "cli.h"
@@ -83,6 +84,7 @@ void add_eval(CLI::App& app, Globals& g) {
     std::string html;
     std::optional<io::AstcOptions> codec;
     std::optional<io::AstcQuality> codec_quality;
+    eval::CostAxis cost_axis = eval::CostAxis::Texels;
   };
   auto a = std::make_shared<Args>();
   cmd->add_option("reference", a->reference, "The input asset (.gltf/.glb): its layout and full texture are the reference")
@@ -121,6 +123,16 @@ void add_eval(CLI::App& app, Globals& g) {
          },
          "astcenc's preset for --codec (default medium, as reparam --texture-format astc)")
       ->type_name("fastest|fast|medium|thorough|exhaustive");
+  cmd->add_option_function<std::string>(
+         "--cost-axis",
+         [a](const std::string& v) {
+           const auto axis = eval::parse_cost_axis(v);
+           if (!axis) throw CLI::ValidationError("--cost-axis", "must be texels or bytes");
+           a->cost_axis = *axis;
+         },
+         "What the savings compare at equal q: image texels, or bytes (each texture encoded as the input's image is, "
+         "relative to that image's bytes; not with --codec) (default texels)")
+      ->type_name("texels|bytes");
   cmd->callback([&g, a] {
     g.action = [&g, a] {
       auto t0 = std::chrono::steady_clock::now();
@@ -148,6 +160,7 @@ void add_eval(CLI::App& app, Globals& g) {
       o.artifacts = !a->html.empty();
       o.codec = a->codec;
       if (o.codec && a->codec_quality) o.codec->quality = *a->codec_quality;
+      o.cost_axis = a->cost_axis;
       eval::EvalArtifacts art;
       ProgressDisplay display(g.verbose);
       const eval::EvalResult r = eval::evaluate(ref, others, *engine, o, &art,
@@ -167,19 +180,24 @@ void add_eval(CLI::App& app, Globals& g) {
           std::snprintf(buf, sizeof buf, "; %s as written: c_r %.3f, q %.4g", L.name.c_str(), L.as_written->c_r,
                         L.as_written->q);
           summary += buf;
+          if (L.as_written->bytes) {
+            std::snprintf(buf, sizeof buf, " (%.3f of the input's bytes)", L.as_written->bytes_ratio);
+            summary += buf;
+          }
         }
       for (const auto& s : r.savings)
         if (s.savings.points) {
           char buf[160];
-          std::snprintf(buf, sizeof buf, "; %s vs %s: %.1f%% of the pixels at equal q", s.layout.c_str(), s.vs.c_str(),
-                        100 * s.savings.ratio);
+          std::snprintf(buf, sizeof buf, "; %s vs %s: %.1f%% of the %s at equal q", s.layout.c_str(), s.vs.c_str(),
+                        100 * s.savings.ratio, r.cost_axis == eval::CostAxis::Bytes ? "bytes" : "pixels");
           summary += buf;
         }
       if (!r.shading_warning.empty()) summary += "; " + r.shading_warning;
       const std::string codec = o.codec ? ", after ASTC " + io::block_name(*o.codec) + " " + io::to_string(o.codec->quality) : "";
-      std::printf("eval: %zu layouts x %zu costs (image texels; input resized %s%s), %zu views at %u px%s (%s, %.0f%% of "
+      const std::string axis = r.cost_axis == eval::CostAxis::Bytes ? "image texels; savings in bytes, encoded as " + r.reference.encoding : "image texels";
+      std::printf("eval: %zu layouts x %zu costs (%s; input resized %s%s), %zu views at %u px%s (%s, %.0f%% of "
                   "the surface resolved, %s), noise floor q %.2g, in %.1f s%s\n",
-                  r.layouts.size(), o.cost_grid.size(), r.input_resize.c_str(), codec.c_str(), r.views,
+                  r.layouts.size(), o.cost_grid.size(), axis.c_str(), r.input_resize.c_str(), codec.c_str(), r.views,
                   r.resolution.resolution, r.resolution.cropped ? " cropped to the asset" : "", eval::to_string(r.filter),
                   100 * r.resolution.resolved_fraction,
                   r.lit ? "lit" : "unlit", r.noise_floor(), r.seconds.total, summary.c_str());
