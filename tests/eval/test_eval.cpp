@@ -52,6 +52,16 @@ engine::MeshRenderDesc render_desc(const DemoMesh& d, const std::vector<float>& 
   return r;
 }
 
+// Small views (64 px) at a quarter of the texels and at all of them, no artifacts: what
+// the tests on the small demo need.
+eval::EvalOptions two_costs() {
+  eval::EvalOptions o;
+  o.resolution = 64;
+  o.cost_grid = {0.25, 1.0};
+  o.artifacts = false;
+  return o;
+}
+
 }  // namespace
 
 TEST_CASE("dodecahedron cameras frame the whole mesh from 20 directions", "[eval]") {
@@ -376,10 +386,7 @@ TEST_CASE("eval: a layout against itself at c_r = 1 gives q = 0, q_r falls as c_
 TEST_CASE("eval: the paper's baseline re-bakes the input layout and area-filters it", "[eval]") {
   io::GltfFile file = pipeline::make_demo_asset({16, 128});
   auto cpu = engine::make_cpu_engine({});
-  eval::EvalOptions o;
-  o.resolution = 64;
-  o.cost_grid = {0.25, 1.0};
-  o.artifacts = false;
+  eval::EvalOptions o = two_costs();
   o.paper_baseline = true;
   const eval::EvalResult r = eval::evaluate(file, {}, *cpu, o);
   REQUIRE(r.layouts.size() == 2);
@@ -399,10 +406,7 @@ TEST_CASE("eval: the paper's baseline re-bakes the input layout and area-filters
 TEST_CASE("eval: a file is scored as written, at its own texture's real size", "[eval]") {
   io::GltfFile file = pipeline::make_demo_asset({16, 128});
   auto cpu = engine::make_cpu_engine({});
-  eval::EvalOptions o;
-  o.resolution = 64;
-  o.cost_grid = {0.25, 1.0};
-  o.artifacts = false;
+  eval::EvalOptions o = two_costs();
   // The same asset: q = 0 at c_r = 1.
   auto same = eval::score_as_written(file, file, *cpu, o);
   CHECK(same.c_r == 1.0);
@@ -485,10 +489,7 @@ TEST_CASE("eval: the isometric layout and another file of the same mesh, report 
 TEST_CASE("eval --cost-axis bytes: each point's texture encoded as the input's image is, savings in bytes", "[eval]") {
   io::GltfFile file = pipeline::make_demo_asset({16, 128});
   auto cpu = engine::make_cpu_engine({});
-  eval::EvalOptions o;
-  o.resolution = 64;
-  o.cost_grid = {0.25, 1.0};
-  o.artifacts = false;
+  eval::EvalOptions o = two_costs();
   o.cost_axis = eval::CostAxis::Bytes;
   const std::vector<uint8_t>& in_bytes = file.image_bytes[0];
   const io::EncodeSettings settings = io::encode_settings_of(in_bytes);
