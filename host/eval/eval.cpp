@@ -87,8 +87,9 @@
 //   encoder, and its bytes relative to the reference image's bytes in the file are the
 //   cost (`bytes`, `bytes_ratio`); an as-written file counts its own image's bytes. A PNG's
 //   bytes follow its content, not its texels (flat art halved costs more than half), so
-//   the two axes can rank layouts differently. Not with a codec, whose fixed-rate blocks
-//   go with texels.
+//   the two axes can rank layouts differently, and a curve's bytes need not grow with its
+//   texels: the savings read each curve's cheapest points (LayoutResult::cost_q). Not with
+//   a codec, whose fixed-rate blocks go with texels.
 // - Shading (`shading`, report: shading "unlit" | "lit", shading_requested, and
 //   shading_warning when auto fell back): unlit, q reads the driving texture's luminance;
 //   lit (lit.h), q reads the luminance of the views lit by a fixed rig through the asset's

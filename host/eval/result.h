@@ -76,8 +76,8 @@ struct LayoutResult {
   std::optional<CurvePoint> as_written;
   std::vector<CurvePoint> curve;  // by the grid's order (increasing c_r)
 
-  // (c_r_actual, q), or (bytes_ratio, q) on the bytes axis, by increasing cost: what eval's
-  // savings compare.
+  // (c_r_actual, q) by increasing cost, or on the bytes axis (bytes_ratio, q) for the points
+  // no cheaper point of the curve matches or beats in q: what eval's savings compare.
   std::vector<std::pair<double, double>> cost_q(CostAxis axis = CostAxis::Texels) const;
   // (c_r, q) at the grid's costs, in its order: what curves of written costs (reparam's
   // `curve`) are compared with.

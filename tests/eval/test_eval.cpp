@@ -523,6 +523,15 @@ TEST_CASE("eval --cost-axis bytes: each point's texture encoded as the input's i
   REQUIRE(other.as_written->bytes);
   CHECK(*other.as_written->bytes == half.image_bytes[0].size());
   CHECK(other.as_written->bytes_ratio == Approx(double(half.image_bytes[0].size()) / double(in_bytes.size())));
+  // Along bytes a curve is its cheapest points: one that costs more and looks no better
+  // than a cheaper one is left out (texels keep every point).
+  eval::LayoutResult made;
+  made.curve.resize(3);
+  made.curve[0].c_r_actual = 0.25, made.curve[0].bytes_ratio = 0.6, made.curve[0].q = 0.02;
+  made.curve[1].c_r_actual = 0.5, made.curve[1].bytes_ratio = 1.2, made.curve[1].q = 0.01;
+  made.curve[2].c_r_actual = 1.0, made.curve[2].bytes_ratio = 0.9, made.curve[2].q = 0.0;
+  CHECK(made.cost_q(eval::CostAxis::Texels).size() == 3);
+  CHECK(made.cost_q(eval::CostAxis::Bytes) == std::vector<std::pair<double, double>>{{0.6, 0.02}, {0.9, 0.0}});
   // The savings compare the curves at equal q along bytes, not texels.
   REQUIRE(r.savings.size() == 1);
   const eval::Savings by_bytes = eval::pixel_ratio_at_equal_q(other.cost_q(eval::CostAxis::Bytes),
