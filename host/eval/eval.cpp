@@ -1279,7 +1279,7 @@ EvalResult evaluate(const io::GltfFile& reference, const std::vector<LayoutInput
   // The bytes axis (see "Cost axis" above): textures encoded as the reference's image is.
   const std::vector<uint8_t>& reference_bytes = reference.image_bytes.at(size_t(ref.image));
   const io::EncodeSettings encoding = io::encode_settings_of(reference_bytes);
-  const bool grey = bytes_axis && io::decode_image(reference_bytes, reference.path).channels <= 2;
+  const bool grey = bytes_axis && io::read_image_header(reference_bytes, reference.path).channels <= 2;
   auto encoded_bytes = [&](const Image& rgb) -> uint64_t {
     Image tex = rgb;
     tex.bits = ref.full.bits;
@@ -1422,7 +1422,7 @@ EvalResult evaluate(const io::GltfFile& reference, const std::vector<LayoutInput
   };
   size_t step = 0;
   const size_t steps = (layouts.size() + 1) * o.cost_grid.size();
-  auto run_curve = [&](const LayoutMesh& m, double aspect, const Resizer& resize) {
+  auto run_curve = [&](const LayoutMesh& m, double aspect, const Resizer& resize, bool encode = true) {
     // Unlit, every cost's textures first, then one scoring of them all (score_views_many);
     // lit, cost by cost (each cost's maps are three channels a map: ten at once would hold
     // gigabytes for a 2048-px asset, and lit curves render each cost on its own anyway).
@@ -1435,7 +1435,7 @@ EvalResult evaluate(const io::GltfFile& reference, const std::vector<LayoutInput
         auto [W, H] = size_at(o.cost_grid[i], s.image_texels, aspect);
         const Stopwatch t0;
         const Image tex = resize.colour(m.full, W, H);
-        if (bytes_axis) bytes[i] = encoded_bytes(tex);
+        if (bytes_axis && encode) bytes[i] = encoded_bytes(tex);
         timing.textures += t0.seconds();
         textures.push_back(layout_textures(s, m, tex, &resize, true, timing));
       }
@@ -1457,7 +1457,7 @@ EvalResult evaluate(const io::GltfFile& reference, const std::vector<LayoutInput
       if (s.lit) p.q_unlit = sc.q_unlit, p.q_lit = sc.q_lit;
       p.q_views = std::move(sc.views);
       if (s.codec) p.codec_bytes = codec_bytes(s, W, H);
-      if (bytes_axis) p.bytes = bytes[i], p.bytes_ratio = double(bytes[i]) / double(reference_bytes.size());
+      if (bytes_axis && bytes[i]) p.bytes = bytes[i], p.bytes_ratio = double(bytes[i]) / double(reference_bytes.size());
       c.mean_log_q += std::log(std::max(p.q, 1e-9)) / double(o.cost_grid.size());  // q = 0: a perfect copy
       c.points.push_back(std::move(p));
     }
@@ -1481,13 +1481,20 @@ EvalResult evaluate(const io::GltfFile& reference, const std::vector<LayoutInput
       // The baseline a user gets from a one-line resize: Lanczos-3 in stored sRGB values
       // (most tools) or in linear light (careful ones), whichever scores better over the
       // grid, so a layout that beats it beats both.
-      Curve srgb = run_curve(m, e.aspect, lanczos_srgb), linear = run_curve(m, e.aspect, lanczos_linear);
+      Curve srgb = run_curve(m, e.aspect, lanczos_srgb, false), linear = run_curve(m, e.aspect, lanczos_linear, false);
       const bool use_linear = linear.mean_log_q < srgb.mean_log_q;
       r.input_resize = use_linear ? "lanczos3-linear" : "lanczos3-srgb";
       L.resize = r.input_resize;
       L.resize_mean_log_q = std::make_pair(srgb.mean_log_q, linear.mean_log_q);
       curve = use_linear ? std::move(linear) : std::move(srgb);
       resize = users = use_linear ? &lanczos_linear : &lanczos_srgb;
+      if (bytes_axis)  // only the variant kept is encoded (each encoding is the costly part)
+        for (CurvePoint& p : curve.points) {
+          const Stopwatch t0;
+          p.bytes = encoded_bytes(resize->colour(m.full, p.width, p.height));
+          p.bytes_ratio = double(*p.bytes) / double(reference_bytes.size());
+          timing.textures += t0.seconds();
+        }
     } else if (users && !e.paper_filter) {
       // Every other layout's full texture is brought to each c_r by the same resize as the
       // input's, so the curves differ by their layouts (and their full textures), not by

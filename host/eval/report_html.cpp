@@ -79,13 +79,22 @@ std::string plot_svg(const EvalResult& report, std::string* why) {
   for (const auto& L : report.layouts) {
     const std::string data = (tmp / ("l" + std::to_string(k) + ".dat")).string();
     std::ofstream f(data);
-    for (const auto& p : L.curve)
-      if (p.q > 0) f << (bytes ? p.bytes_ratio : p.c_r_actual) << " " << p.q << "\n";
+    // Along bytes the line joins the points the savings read (the cheapest, by bytes:
+    // LayoutResult::cost_q); the others are hollow.
+    for (const auto& [c, q] : L.cost_q(report.cost_axis))
+      if (q > 0) f << c << " " << q << "\n";
     std::string name = L.name;
     for (char& c : name)
       if (c == '\'' || c == '_') c = ' ';
     const std::string lt = " lt " + std::to_string(k + 1);
     plot += (k ? ", " : "") + std::string("'") + data + "' using 1:2 with linespoints" + lt + " lw 2 pt 7 title '" + name + "'";
+    if (bytes) {
+      const std::string all = (tmp / ("a" + std::to_string(k) + ".dat")).string();
+      std::ofstream fa(all);
+      for (const auto& p : L.curve)
+        if (p.q > 0) fa << p.bytes_ratio << " " << p.q << "\n";
+      plot += ", '" + all + "' using 1:2 with points" + lt + " pt 6 notitle";
+    }
     // The file as written (its own texture at its real size): one large square in the
     // layout's colour, so a reader sees where the asset a user gets sits on its own curve.
     if (L.as_written && L.as_written->q > 0) {
@@ -181,10 +190,16 @@ void write_html_report(const EvalResult& report, const EvalArtifacts& art, const
       << "], " << s.points << " levels.</p>\n";
     any = true;
   }
-  if (!any) h << "<p>No pair of layouts reaches a common q on this grid (or only one layout).</p>\n";
+  if (!any)
+    h << "<p>No pair of layouts reaches a common q on this grid (or only one layout)"
+      << (bytes ? "; along bytes a curve keeps only its cheapest points, and where the input at full size is its "
+                  "cheapest (q 0), no downscale of it is left to compare with"
+                : "")
+      << ".</p>\n";
 
-  h << "<h2>log q<sub>r</sub> against c<sub>r</sub></h2>\n";
-  if (!svg.empty()) h << "<img src=\"plot.svg\" alt=\"q_r against c_r\" width=\"760\" height=\"480\">\n";
+  h << "<h2>log q<sub>r</sub> against " << (bytes ? "bytes" : "c<sub>r</sub>") << "</h2>\n";
+  if (!svg.empty())
+    h << "<img src=\"plot.svg\" alt=\"q_r against " << (bytes ? "bytes" : "c_r") << "\" width=\"760\" height=\"480\">\n";
   else h << "<p><i>Plot unavailable: " << escape(why) << ".</i></p>\n";
 
   h << "<table><tr><th class=\"l\">layout</th><th class=\"l\">texture</th>";

@@ -536,8 +536,9 @@ TEST_CASE("eval --cost-axis bytes: each point's texture encoded as the input's i
   REQUIRE(r.savings.size() == 1);
   const eval::Savings by_bytes = eval::pixel_ratio_at_equal_q(other.cost_q(eval::CostAxis::Bytes),
                                                               r.layouts[0].cost_q(eval::CostAxis::Bytes), r.noise_floor());
+  REQUIRE(by_bytes.points > 0);
   CHECK(r.savings[0].savings.points == by_bytes.points);
-  if (by_bytes.points) CHECK(r.savings[0].savings.ratio == Approx(by_bytes.ratio));
+  CHECK(r.savings[0].savings.ratio == Approx(by_bytes.ratio));
   const auto report = r.to_json();
   CHECK(report["cost_axis"] == "bytes");
   CHECK(report["reference"]["image_bytes"] == in_bytes.size());

@@ -134,6 +134,9 @@ void add_eval(CLI::App& app, Globals& g) {
          "relative to that image's bytes; not with --codec) (default texels)")
       ->type_name("texels|bytes");
   cmd->callback([&g, a] {
+    if (a->cost_axis == eval::CostAxis::Bytes && a->codec)
+      throw CLI::ValidationError("--cost-axis", "bytes counts the input's own codec (PNG or JPEG); with --codec the cost "
+                                                "is the codec's fixed-rate blocks, which go with texels");
     g.action = [&g, a] {
       auto t0 = std::chrono::steady_clock::now();
       g.prepare_outputs({}, {a->html});
@@ -185,13 +188,22 @@ void add_eval(CLI::App& app, Globals& g) {
             summary += buf;
           }
         }
-      for (const auto& s : r.savings)
+      for (const auto& s : r.savings) {
+        char buf[200];
         if (s.savings.points) {
-          char buf[160];
           std::snprintf(buf, sizeof buf, "; %s vs %s: %.1f%% of the %s at equal q", s.layout.c_str(), s.vs.c_str(),
                         100 * s.savings.ratio, r.cost_axis == eval::CostAxis::Bytes ? "bytes" : "pixels");
           summary += buf;
+        } else if (r.cost_axis == eval::CostAxis::Bytes && r.layout(s.vs)) {
+          // Along bytes a curve keeps its cheapest points (LayoutResult::cost_q): say where
+          // the one compared with is cheapest, so that "no saving" has its reason.
+          const auto front = r.layout(s.vs)->cost_q(eval::CostAxis::Bytes);
+          if (front.empty()) continue;
+          std::snprintf(buf, sizeof buf, "; %s vs %s: no common q along bytes (%s's cheapest: q %.3g at %.3f of the bytes)",
+                        s.layout.c_str(), s.vs.c_str(), s.vs.c_str(), front.front().second, front.front().first);
+          summary += buf;
         }
+      }
       if (!r.shading_warning.empty()) summary += "; " + r.shading_warning;
       const std::string codec = o.codec ? ", after ASTC " + io::block_name(*o.codec) + " " + io::to_string(o.codec->quality) : "";
       const std::string axis = r.cost_axis == eval::CostAxis::Bytes ? "image texels; savings in bytes, encoded as " + r.reference.encoding : "image texels";
