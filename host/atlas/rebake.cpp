@@ -355,7 +355,7 @@ Image rebake(const Image& source, const std::vector<RebakeMesh>& meshes, const R
 
   size_t count = 0;
   for (uint8_t c : covered) count += c;
-  if (opt.fill_gutter) fill_gutter(out, covered, opt.role == RebakeRole::Color);  // no surround baked here: one-texel ring
+  if (opt.fill_gutter) fill_gutter(out, covered, opt.role == RebakeRole::Color);
   if (stats) {
     stats->covered = count;
     stats->triangles = tris.size();

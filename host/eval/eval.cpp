@@ -1428,7 +1428,7 @@ EvalResult evaluate(const io::GltfFile& reference, const std::vector<LayoutInput
     // gigabytes for a 2048-px asset, and lit curves render each cost on its own anyway).
     const size_t group = s.lit ? 1 : o.cost_grid.size();
     std::vector<Scores> scores;
-    std::vector<uint64_t> bytes(o.cost_grid.size(), 0);
+    std::vector<std::optional<uint64_t>> bytes(o.cost_grid.size());  // along bytes, where encoded here
     for (size_t first = 0; first < o.cost_grid.size(); first += group) {
       std::vector<LayoutTextures> textures;
       for (size_t i = first; i < std::min(o.cost_grid.size(), first + group); ++i) {
@@ -1457,7 +1457,7 @@ EvalResult evaluate(const io::GltfFile& reference, const std::vector<LayoutInput
       if (s.lit) p.q_unlit = sc.q_unlit, p.q_lit = sc.q_lit;
       p.q_views = std::move(sc.views);
       if (s.codec) p.codec_bytes = codec_bytes(s, W, H);
-      if (bytes_axis && bytes[i]) p.bytes = bytes[i], p.bytes_ratio = double(bytes[i]) / double(reference_bytes.size());
+      if (bytes[i]) p.bytes = bytes[i], p.bytes_ratio = double(*bytes[i]) / double(reference_bytes.size());
       c.mean_log_q += std::log(std::max(p.q, 1e-9)) / double(o.cost_grid.size());  // q = 0: a perfect copy
       c.points.push_back(std::move(p));
     }
