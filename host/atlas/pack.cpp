@@ -35,7 +35,7 @@ bool triangle_overlaps_box(const double a[2], const double b[2], const double c[
 
 std::array<double, 2> Packing::map(size_t chart, double x, double y) const {
   const ChartPlacement& p = placements[chart];
-  const double sx = scale * x, sy = scale * y;
+  const double sx = p.scale * x, sy = p.scale * y;
   switch (p.rotation) {
     case 0: return {sx + p.tx, sy + p.ty};
     case 1: return {-sy + p.tx, sx + p.ty};
@@ -61,6 +61,7 @@ struct Footprint {
   uint32_t count = 0;          // set cells
   uint64_t covered = 0;        // texels whose centre some triangle covers (overlaps once)
   uint32_t stride = 1;         // cells: positions are multiples of it (ChartShape::align)
+  double scale = 1;            // the chart's scale: the packing's, or 1 when pinned
 };
 
 // The x-extent of triangle v cut to the band y0 <= y <= y1 (y0 == y1: a line): its
@@ -96,6 +97,8 @@ void mark_centres(const double v[3][2], uint32_t width, uint32_t height, std::ve
 
 Footprint rasterize(const ChartShape& chart, double scale, uint32_t block) {
   Footprint f;
+  if (chart.pinned) scale = 1;
+  f.scale = scale;
   const size_t n = chart.points.size() / 2;
   double mx = std::numeric_limits<double>::infinity(), my = mx, Mx = -mx, My = -mx;
   for (uint32_t i : chart.triangles) {
@@ -469,6 +472,7 @@ Packing place(const Prints& P, uint32_t width, uint32_t height, const PackOption
     // Footprint origin in texels, and the affine placement.
     ChartPlacement& pl = out.placements[i];
     pl.rotation = best_k;
+    pl.scale = f.scale;
     pl.x = uint32_t(at[0]) * b;
     pl.y = uint32_t(at[1]) * b;
     pl.width = uint32_t(best->fw) * b;
@@ -548,12 +552,21 @@ Packing pack_max_scale(const std::vector<ChartShape>& charts, uint32_t width, ui
   // an upper bound: texel centres counted at a probe scale of at most ~4M texels, with 5 %
   // to spare for the count's discretization. (The sum of triangle areas would be too low a
   // bound where charts share texels.)
+  // Pinned charts take their texels at every scale: the bound is the scale at which the
+  // others fill what they leave.
   const double area1 = chart_area(charts);  // at scale 1, overlaps counted twice
+  if (std::all_of(charts.begin(), charts.end(), [](const ChartShape& c) { return c.pinned; }))
+    return pack_charts(charts, width, height, s_max, options);  // no scale to choose
   double hi = s_max;
   if (area1 > 0) {
     const double probe = std::min(1.0, std::sqrt(4e6 / area1));
-    const double covered1 = rasterize_all(charts, probe, options).covered / (probe * probe);
-    if (covered1 > 0) hi = std::min(hi, 1.05 * std::sqrt(double(width) * height / covered1));
+    const Prints p = rasterize_all(charts, probe, options);
+    double pinned = 0;
+    for (size_t i = 0; i < charts.size(); ++i)
+      if (charts[i].pinned) pinned += double(p.prints[i].covered);
+    const double covered1 = (p.covered - pinned) / (probe * probe), room = double(width) * height - pinned;
+    if (room <= 0) return Packing{};  // the pinned charts alone fill the image
+    if (covered1 > 0) hi = std::min(hi, 1.05 * std::sqrt(room / covered1));
   }
   Packing best = pack_charts(charts, width, height, hi, options);
   if (best.ok) return best;
@@ -701,7 +714,12 @@ Packing choose_at_aspect(const std::vector<ChartShape>& charts, double area1, ui
     auto d = rule.dims(L);
     p = pack_max_scale(charts, d[0], d[1], o.pack, o.s_max);
   } else if (o.measure == CostMeasure::ChartTexels && old_used_texels > 0 && area1 > 0) {
-    const double s = std::min(o.s_max, std::sqrt(o.cost * old_used_texels / area1));
+    // Pinned charts keep their area (scale 1); the others' scale spends what is left.
+    double pinned = 0;
+    for (const ChartShape& c : charts)
+      if (c.pinned) pinned += chart_area(c);
+    if (area1 <= pinned) return p;  // nothing to scale
+    const double s = std::min(o.s_max, std::sqrt(std::max(0.0, o.cost * old_used_texels - pinned) / (area1 - pinned)));
     const uint32_t L = smallest_side(s);
     if (L == 0) return p;
     if (o.pot) {
@@ -817,7 +835,8 @@ AtlasChoice choose_atlas(const std::vector<ChartShape>& charts, uint32_t old_wid
       double mx = std::numeric_limits<double>::infinity(), my = mx, Mx = -mx, My = -mx;
       for (size_t i = 0; i + 1 < pts.size(); i += 2)
         mx = std::min(mx, pts[i]), Mx = std::max(Mx, pts[i]), my = std::min(my, pts[i + 1]), My = std::max(My, pts[i + 1]);
-      const double own = ((Mx - mx) * best->scale + o.pack.gutter) / ((My - my) * best->scale + o.pack.gutter);
+      const double sl = charts[largest].pinned ? 1.0 : best->scale;
+      const double own = ((Mx - mx) * sl + o.pack.gutter) / ((My - my) * sl + o.pack.gutter);
       if (own > 0 && std::isfinite(own)) shapes.push_back(own), shapes.push_back(1 / own);
     }
     try_shapes(shapes);

@@ -46,6 +46,12 @@ struct ChartShape {
   // 512 x 512 image score q 0.00057 over eval's trilinear views at any whole-texel offset,
   // 0.00019 at multiples of 16 (bilinear, level 0 only: 5e-9 either way).
   uint32_t align = 1;
+  // Packed at scale 1 whatever the packing's scale (ChartPlacement::scale): a chart whose
+  // texels are copied from the source at its own density. The packing's scale then applies
+  // to the other charts alone, which take all the slack that rounding and alignment leave:
+  // with one uniform scale, Fox's two copied charts aligned to its 16-texel mip phase fit only
+  // at scale 0.983, and were then resampled rather than copied.
+  bool pinned = false;
 };
 
 struct PackOptions {
@@ -72,10 +78,11 @@ uint32_t mip_phase_align(uint32_t gutter, uint32_t block);
 // charts and a sampler axis that repeats (GL REPEAT) or not (CLAMP_TO_EDGE, MIRRORED_REPEAT).
 inline uint32_t edge_gutter(uint32_t gutter, bool repeats) { return repeats ? (gutter + 1) / 2 : 0; }
 
-// Where one chart goes: atlas = R_k (scale * p) + t, with R_k = R_1^k and
+// Where one chart goes: atlas = R_k (scale * p) + t (the placement's scale), with R_k = R_1^k and
 // R_1 (x, y) = (-y, x) (in the y-down image a clockwise quarter turn).
 struct ChartPlacement {
   uint32_t rotation = 0;  // k in {0, 1, 2, 3}
+  double scale = 1;       // the packing's scale, or 1 for a pinned chart (ChartShape::pinned)
   double tx = 0, ty = 0;
   // Texel cell of the footprint's bounding box corner and its size in texels (multiples of
   // the block size).
@@ -85,7 +92,7 @@ struct ChartPlacement {
 struct Packing {
   bool ok = false;
   uint32_t width = 0, height = 0;  // atlas size in texels
-  double scale = 1;                // uniform scale applied to every chart
+  double scale = 1;                // uniform scale applied to every chart not pinned
   std::vector<ChartPlacement> placements;  // one per chart, in input order
   double chart_area = 0;     // sum of |triangle areas| after scaling, texels^2 (eq. 20: overlaps count twice)
   double covered = 0;        // atlas texels whose centre a chart covers (overlapping charts count once)
@@ -105,11 +112,11 @@ struct Packing {
 Packing pack_charts(const std::vector<ChartShape>& charts, uint32_t width, uint32_t height, double scale = 1.0,
                     const PackOptions& options = {});
 
-// (b) The largest scale s <= s_max at which pack_charts succeeds, by bisection to relative
-// tolerance `tolerance` (a scale s (1 + tolerance) failed, or s == s_max). The heuristic
-// packer is not strictly monotone in s, so "largest" is local: s fits, s (1 + tolerance)
-// does not. ok = false when nothing fits even at scale 1e-6 (too many charts for the
-// gutters).
+// (b) The largest scale s <= s_max at which pack_charts succeeds (pinned charts at 1
+// throughout), by bisection to relative tolerance `tolerance` (a scale s (1 + tolerance)
+// failed, or s == s_max). The heuristic packer is not strictly monotone in s, so "largest"
+// is local: s fits, s (1 + tolerance) does not. ok = false when nothing fits even at scale
+// 1e-6 (too many charts for the gutters, or pinned charts that alone overfill the image).
 Packing pack_max_scale(const std::vector<ChartShape>& charts, uint32_t width, uint32_t height,
                        const PackOptions& options = {}, double s_max = 1.0, double tolerance = 1e-3);
 

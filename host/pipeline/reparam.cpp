@@ -376,6 +376,12 @@ struct Candidate {
   // texels of the image it was copied from at those levels, not boxes of another phase.
   bool mip_aligned = false;
   uint32_t mip_depth = 1;  // sides multiples of mip_depth * A (2: one level cleaner than the gutter)
+  // The copied units packed at the source's density (atlas::ChartShape::pinned), the others
+  // at the packing's scale, where the copies fit so: the alignment's rounding then shrinks
+  // the resampled units, not the copies, which stay bit-exact. Set for the mip-aligned
+  // variants (choose_layout); where the copies alone overfill the budget, every unit takes
+  // the one scale.
+  bool pin_copies = false;
   // Every chart flattened at one density instead (ReparamOptions::isometric).
   bool isometric = false;
   // Charts unreshaped, each packing unit at its own uniform scale (unit_scales_filling).
@@ -737,6 +743,7 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
         for (uint32_t c : units[u]) unit_exact[u] &= char(new_uv_of[c] == charts[c].uv);
         shapes[u].snap = unit_exact[u] != 0;  // so that the atlas chosen has room for whole-texel origins
         shapes[u].align = mip_align;
+        shapes[u].pinned = cand.pin_copies && unit_exact[u];
         out.unreshaped_units += size_t(unit_exact[u]);
       }
     // The image edges: half the gutter on an axis a sampler repeats across, else none, but
@@ -756,16 +763,24 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
     budget.pack.edge_x = std::max(ring, atlas::edge_gutter(gutter, repeats[0]));
     budget.pack.edge_y = std::max(ring, atlas::edge_gutter(gutter, repeats[1]));
     atlas::AtlasChoice choice = atlas::choose_atlas(shapes, P.driver.width, P.driver.height, P.old_used, budget);
+    const auto is_pinned = [](const atlas::ChartShape& c) { return c.pinned; };
+    if (!choice.packing.ok && std::any_of(shapes.begin(), shapes.end(), is_pinned)) {  // the copies alone overfill it
+      for (atlas::ChartShape& c : shapes) c.pinned = false;
+      choice = atlas::choose_atlas(shapes, P.driver.width, P.driver.height, P.old_used, budget);
+    }
+    const bool pinned = std::any_of(shapes.begin(), shapes.end(), is_pinned);
     if (!choice.packing.ok)
       throw InputError(file.path, "the charts of layout " + std::to_string(li) + " do not fit any atlas within the budget");
     // Units whose charts keep their shape keep their texels (atlas/place_texels.h): the
     // source resized once to Rw x Rh at the packing scale (floored to whole texels, so the
     // scale per axis is Rw / W, Rh / H), the units' points scaled to that grid and packed
     // with whole-texel translations into the same atlas; a little smaller when snapping
-    // does not fit.
+    // does not fit. Pinned, they were packed on the source's own grid already.
     std::vector<std::array<double, 2>> unit_factor(units.size(), {1.0, 1.0});
     uint32_t Rw = 0, Rh = 0;
-    if (std::find(unit_exact.begin(), unit_exact.end(), 1) != unit_exact.end()) {
+    if (pinned) {
+      Rw = uint32_t(W), Rh = uint32_t(H);
+    } else if (std::find(unit_exact.begin(), unit_exact.end(), 1) != unit_exact.end()) {
       bool placed = false;
       for (int attempt = -1; attempt < 12 && !placed; ++attempt) {
         double s = choice.packing.scale * std::pow(0.99, std::max(attempt, 0));
@@ -939,6 +954,7 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
     lr.shared_texel_charts = P.shared_charts;
     lr.packing_units = units.size();
     lr.exact_units = size_t(std::count(unit_exact.begin(), unit_exact.end(), 1));
+    lr.pinned_units = size_t(std::count_if(shapes.begin(), shapes.end(), is_pinned));
     lr.exact_texels = exact_texels;
     lr.atlas = {packing.width, packing.height};
     lr.scale = packing.scale;
@@ -1477,9 +1493,14 @@ void choose_layout(Run& run, const std::vector<Candidate>& plans) {
   // 0.516, MultiUVTest 0.774 -> 0.743 (with both: see docs/DEVELOPERS.md).
   // Not under --size N (the sides would round up past the size asked for); under --pot the
   // sides are powers of two already, so only the copies' phase is varied; a plan whose
-  // gutter allows no alignment (A = 1) is not varied at all.
+  // gutter allows no alignment (A = 1) is not varied at all. The copies stay at the
+  // source's density where they fit so (Candidate::pin_copies): Duck at half the texels,
+  // `unit-scale+least-squares+mip-aligned` q 0.000601 with its copies scaled to 0.937 of it
+  // and resampled, 0.000281 pinned (the resize 0.00066 at that atlas's shape); at 0.4 of the
+  // texels `unit-scale+wide-gutter+mip-aligned` 0.000578 -> 0.000171.
   auto with_alignment = [&](Candidate c, uint32_t depth) -> std::optional<Candidate> {
     c.name += depth == 1 ? "+mip-aligned" : "+mip-aligned-deep", c.mip_aligned = true, c.mip_depth = depth;
+    c.pin_copies = true;
     for (const Prepared& P : run.prepared)
       if (budget_options(o, c, P.W, P.H).side_multiple > 1) return c;
     return std::nullopt;

@@ -28,7 +28,7 @@ namespace uvpress::pipeline {
 // Which algorithm wrote an output: raised by every change that changes reparam's outputs
 // for the same input and options (layouts, bakes, gutters, encoders), so that a resumed
 // batch redoes what an older algorithm wrote (batch compares it with the options).
-constexpr int kReparamRevision = 17;  // 2: image-edge gutters by sampler, surround in gutters; 3: equal-slope candidates, least squares keeps the surround; 4: the wide-gutter variant; 5: normal-mapped assets scored lit (candidates, guard); 6: the unit-scale candidate, wide gutters for the best other plan too; 7: scoring views rolled to the asset and capped at 2560 where the cap binds (the truck); 8: below half the texels, the allocating plans also with the half's allocation; 9: the view bake's CG stops on its render error (triangle-stage scores move by ~1e-5); 10: the triangle stage stops stalled searches by default; 11: atlas shapes between 1:2 and 2:1 of the source's (steps of 2^(1/4) to 2^(1/16), the largest chart's own); 12: never a texel over an image-texel budget; 13: the +mip-aligned variants; 14: GMSD sums of eval-sized views in interleaved lanes; 15: replaced UVs leave the bufferViews they shared; 16: truecolour PNGs re-baked as a palette where it is faithful; 17: the gutter fill continues a surround for as far again (atlas::fill_ring)
+constexpr int kReparamRevision = 18;  // 2: image-edge gutters by sampler, surround in gutters; 3: equal-slope candidates, least squares keeps the surround; 4: the wide-gutter variant; 5: normal-mapped assets scored lit (candidates, guard); 6: the unit-scale candidate, wide gutters for the best other plan too; 7: scoring views rolled to the asset and capped at 2560 where the cap binds (the truck); 8: below half the texels, the allocating plans also with the half's allocation; 9: the view bake's CG stops on its render error (triangle-stage scores move by ~1e-5); 10: the triangle stage stops stalled searches by default; 11: atlas shapes between 1:2 and 2:1 of the source's (steps of 2^(1/4) to 2^(1/16), the largest chart's own); 12: never a texel over an image-texel budget; 13: the +mip-aligned variants; 14: GMSD sums of eval-sized views in interleaved lanes; 15: replaced UVs leave the bufferViews they shared; 16: truecolour PNGs re-baked as a palette where it is faithful; 17: the gutter fill continues a surround for as far again (atlas::fill_ring); 18: the +mip-aligned variants keep their copies at the source density (ChartShape::pinned)
 
 struct ReparamOptions {
   double cost = 0.5;       // relative pixel cost c_r of the new textures vs the old (eq. 20-21)
@@ -215,9 +215,12 @@ struct LayoutReport {
   size_t shared_texel_charts = 0;       // packed with the charts they share texels with, unreshaped
   size_t packing_units = 0;
   size_t exact_units = 0;   // units whose texels are copied, not resampled
+  // Of them, those packed at the source's density while the other units took the packing's
+  // scale (`scale`): the +mip-aligned variants' copies, where they fit so.
+  size_t pinned_units = 0;
   size_t exact_texels = 0;  // texels copied (over every image of the layout)
   std::array<uint32_t, 2> atlas{};  // the driver's new size, texels
-  double scale = 0;         // the packing scale, new texels per source texel
+  double scale = 0;         // the packing scale, new texels per source texel (pinned units: 1)
   double scale_cap = 0;     // the source density of the densest triangles
   bool capped_at_source_density = false;  // scale reached scale_cap
   double packing_efficiency = 0;  // share of the image's texels under charts

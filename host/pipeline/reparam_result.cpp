@@ -63,6 +63,7 @@ json layout_json(const LayoutReport& l) {
   j["shared_texel_charts"] = l.shared_texel_charts;
   j["packing_units"] = l.packing_units;
   j["exact_units"] = l.exact_units;
+  j["pinned_units"] = l.pinned_units;
   j["exact_texels"] = l.exact_texels;
   j["atlas"] = l.atlas;
   j["scale"] = l.scale;

@@ -11,6 +11,7 @@
 
 using namespace uvpress;
 using atlas::ChartShape;
+using atlas::ChartPlacement;
 using atlas::Packing;
 using atlas::PackOptions;
 
@@ -222,6 +223,59 @@ TEST_CASE("pack: the bisection scale is maximal", "[atlas]") {
   // Too many charts for the gutters: failure, not a crash.
   std::vector<ChartShape> many(400, rect(0, 0, 1, 1));
   CHECK_FALSE(atlas::pack_max_scale(many, 32, 32, opt).ok);
+}
+
+TEST_CASE("pack: pinned charts stay at the source density, aligned, while the others take the slack", "[atlas]") {
+  // A 40 x 40 chart copied from the source (snapped, at multiples of 8) and 24 others that
+  // do not fit at scale 1: the bisection shrinks only the others.
+  std::vector<ChartShape> charts = random_charts(24, 11);
+  ChartShape copy = rect(3.25, 5.5, 40, 40);
+  copy.snap = true, copy.align = 8, copy.pinned = true;
+  charts.insert(charts.begin() + 5, copy);
+  PackOptions opt;
+  const Packing p = atlas::pack_max_scale(charts, 128, 96, opt, 1.0, 1e-4);
+  REQUIRE(p.ok);
+  REQUIRE(p.scale < 0.9);  // the others were shrunk...
+  CHECK(p.placements[5].scale == 1.0);  // ...the pinned chart was not
+  for (size_t i = 0; i < charts.size(); ++i)
+    if (i != 5) CHECK(p.placements[i].scale == p.scale);
+  // Its points land at scale 1, moved by a whole multiple of 8 texels (any quarter turn).
+  const auto a = p.map(5, 3.25, 5.5), b = p.map(5, 43.25, 5.5), c = p.map(5, 3.25, 45.5);
+  CHECK(std::hypot(b[0] - a[0], b[1] - a[1]) == Approx(40.0).epsilon(1e-12));
+  CHECK(std::hypot(c[0] - a[0], c[1] - a[1]) == Approx(40.0).epsilon(1e-12));
+  const ChartPlacement& pl = p.placements[5];
+  CHECK(pl.tx == std::round(pl.tx));
+  CHECK(pl.ty == std::round(pl.ty));
+  CHECK(pl.x % 8 == 0);
+  CHECK(pl.y % 8 == 0);
+  // The packing is valid as placed (footprints apart by the gutter, inside the image), and
+  // maximal for the others: 0.1 % more scale does not fit.
+  std::vector<int> label;
+  CHECK(label_atlas(charts, p, label));
+  CHECK(gutters_hold(label, p.width, p.height, int(opt.gutter)));
+  CHECK_FALSE(atlas::pack_charts(charts, 128, 96, p.scale * (1 + 1e-3), opt).ok);
+  // Uniformly scaled instead, the copy shrinks with the rest: pinning is what keeps it.
+  for (ChartShape& ch : charts) ch.pinned = false;
+  const Packing u = atlas::pack_max_scale(charts, 128, 96, opt, 1.0, 1e-4);
+  REQUIRE(u.ok);
+  CHECK(u.placements[5].scale == u.scale);
+  CHECK(u.scale < 1.0);
+  // Pinned charts that alone overfill the image: no packing, at any scale of the others.
+  std::vector<ChartShape> big = {rect(0, 0, 200, 200), rect(0, 0, 10, 10)};
+  big[0].pinned = true;
+  CHECK_FALSE(atlas::pack_max_scale(big, 128, 96, opt).ok);
+  // Under a chart-texel budget (eq. 21) the pinned chart's texels are spent first, at 1,
+  // and the others' scale buys what is left: 1600 + s^2 * 4 * 400 = 0.5 * (1600 + 4 * 1600).
+  std::vector<ChartShape> four = {copy, rect(0, 0, 40, 40), rect(0, 0, 40, 40), rect(0, 0, 40, 40), rect(0, 0, 40, 40)};
+  atlas::BudgetOptions bo;
+  bo.cost = 0.5;
+  bo.measure = atlas::CostMeasure::ChartTexels;
+  const double old_used = 5 * 1600.0;
+  const auto choice = atlas::choose_atlas(four, 256, 256, old_used, bo);
+  REQUIRE(choice.packing.ok);
+  CHECK(choice.packing.placements[0].scale == 1.0);
+  CHECK(choice.packing.scale == Approx(std::sqrt((0.5 * old_used - 1600) / 6400)).epsilon(1e-9));
+  CHECK(choice.cost_ratio == Approx(0.5).epsilon(1e-6));
 }
 
 TEST_CASE("pack: atlas size from the budget", "[atlas]") {

@@ -535,11 +535,16 @@ TEST_CASE("reparam on Duck at half the texels: gutters and mip alignment built, 
     CHECK(l.side_multiple == (best.find("-deep") != std::string::npos ? 2 : 1) * l.mip_align);
     CHECK(l.atlas[0] % l.side_multiple == 0);
     CHECK(l.atlas[1] % l.side_multiple == 0);
+    // The aligned variants keep their copies at the source's density (Candidate::
+    // pin_copies) where they fit so, as Duck's do at half its texels.
+    CHECK(l.pinned_units == l.exact_units);
+    CHECK(l.pinned_units > 0);
   }
   // Issue 17: at half the texels Duck writes reparam's layout, and it beats the input
   // resized to half its texels at its own aspect (eval's baseline) by more than eval's
   // noise floor. Measured: 0.00037 against 0.00069, floor 0.00014 (before the mip-aligned
-  // variants the resize was written: 0.00074 against 0.00069).
+  // variants the resize was written: 0.00074 against 0.00069); 0.00028 since the aligned
+  // variants pin their copies at the source's density, and then by more than half.
   CHECK(report["chosen"] == "reparam");
   const eval::EvalResult half = input_at(run.in, *engine, 0.5);
   REQUIRE(half.layouts.size() == 1);
@@ -548,6 +553,7 @@ TEST_CASE("reparam on Duck at half the texels: gutters and mip alignment built, 
   INFO("written " << q_written << ", resize at half " << q_half << ", noise floor " << floor);
   CHECK(floor > 0);
   CHECK(q_written < q_half - floor);
+  CHECK(q_written < 0.5 * q_half);
 }
 
 TEST_CASE("reparam --no-optimize at cost 1 on Duck: with the mip chain kept whole, copies look the same in mip-mapped views",
