@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <vector>
 
 using namespace uvpress;
 
@@ -56,4 +57,41 @@ TEST_CASE("place_texels: a snapped chart's texels are copied under each quarter 
       }
     CHECK(checked == 48);
   }
+}
+
+TEST_CASE("place_texels: a pinned chart is copied from the source itself while the packing shrinks the others",
+          "[atlas]") {
+  // Every source texel holds its own index. The 8 x 6 chart is pinned (ChartShape::pinned):
+  // packed at scale 1 beside two 30 x 30 charts that only fit much smaller, so its texels
+  // are the source's own, one for one, whatever the packing's scale.
+  Image src;
+  src.width = 16, src.height = 12, src.channels = 1;
+  src.pixels.resize(16 * 12);
+  for (size_t i = 0; i < src.pixels.size(); ++i) src.pixels[i] = float(i);
+  atlas::ChartShape chart{{2, 3, 10, 3, 10, 9, 2, 9}, {0, 1, 2, 0, 2, 3}, true};
+  chart.pinned = true;
+  const atlas::ChartShape big{{0, 0, 30, 0, 30, 30, 0, 30}, {0, 1, 2, 0, 2, 3}};
+  const std::vector<atlas::ChartShape> charts = {big, chart, big};
+  atlas::PackOptions opt;
+  opt.gutter = 2;
+  const atlas::Packing p = atlas::pack_max_scale(charts, 40, 24, opt);
+  REQUIRE(p.ok);
+  CHECK(p.scale < 0.6);
+  CHECK(p.placements[1].scale == 1.0);
+  Image atlas;
+  atlas.width = 40, atlas.height = 24, atlas.channels = 1;
+  atlas.pixels.assign(40 * 24, -1.0f);
+  CHECK(atlas::copy_chart_texels(src, chart, p, 1, 0, atlas) == 48);
+  size_t checked = 0;
+  auto o = p.map(1, 0, 0), ex = p.map(1, 1, 0), ey = p.map(1, 0, 1);
+  for (uint32_t y = 0; y < 24; ++y)
+    for (uint32_t x = 0; x < 40; ++x) {
+      const float v = atlas.at(x, y, 0);
+      if (v < 0) continue;
+      const double cx = x + 0.5 - o[0], cy = y + 0.5 - o[1];
+      const double sx = cx * (ex[0] - o[0]) + cy * (ex[1] - o[1]), sy = cx * (ey[0] - o[0]) + cy * (ey[1] - o[1]);
+      CHECK(v == src.at(uint32_t(std::floor(sx)), uint32_t(std::floor(sy)), 0));
+      ++checked;
+    }
+  CHECK(checked == 48);
 }
