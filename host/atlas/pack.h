@@ -50,7 +50,7 @@ struct ChartShape {
   // texels are copied from the source at its own density. The packing's scale then applies
   // to the other charts alone, which take all the slack that rounding and alignment leave:
   // with one uniform scale, Fox's two copied charts aligned to its 16-texel mip phase fit only
-  // at scale 0.983, and were then resampled rather than copied.
+  // at scale 0.983, and were then copied from the source resized to 0.983, not from itself.
   bool pinned = false;
 };
 
@@ -151,7 +151,7 @@ struct BudgetOptions {
 
 struct AtlasChoice {
   Packing packing;        // size, scale, placements, efficiency
-  double cost_ratio = 0;  // achieved c_r = scale^2 * chart area / old_used_texels (eq. 21)
+  double cost_ratio = 0;  // achieved c_r = the scaled chart area / old_used_texels (eq. 21; pinned charts at 1)
   double texel_ratio = 0; // width * height / (old_width * old_height)
 };
 
@@ -161,7 +161,9 @@ struct AtlasChoice {
 // is reported from it when > 0.
 //  - size > 0: longer side = size (rounded to a power of two with pot), shorter side by the
 //    source aspect; the scale is the largest that fits (<= s_max).
-//  - ChartTexels: scale = min(s_max, sqrt(cost * old_used / chart area)), then the smallest
+//  - ChartTexels: scale = min(s_max, sqrt(cost * old_used / chart area)) (pinned charts: their
+//    area at scale 1 spent first, the scale from what is left of the budget; none left: ok =
+//    false), then the smallest
 //    atlas of the source aspect that holds the charts at that scale; with pot, the
 //    power-of-two size nearest (in log area) to that atlas, and the scale is then re-fitted
 //    to it (so c_r is only approximate with pot).

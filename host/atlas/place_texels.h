@@ -23,7 +23,7 @@ namespace uvpress::atlas {
 // square overlaps one of `shape`'s triangles (conservative, as the packer's footprint),
 // dilated by `dilation` texels so that bilinear taps at the chart's border read the source's
 // own neighbours too, takes the texel of `resized` that the placement maps onto it. The
-// chart's points times packing.scale must be in `resized`'s texel units and the placement a
+// chart's points times its placement's scale must be in `resized`'s texel units and the placement a
 // whole-texel translation (snap), with `resized` and `atlas` of the same channel count.
 // Texels that map outside `resized` are left as they are. Returns the number copied; when
 // `copied` is given (atlas width * height bytes) every texel written is set to 1 in it, so

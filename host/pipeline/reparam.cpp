@@ -377,10 +377,11 @@ struct Candidate {
   bool mip_aligned = false;
   uint32_t mip_depth = 1;  // sides multiples of mip_depth * A (2: one level cleaner than the gutter)
   // The copied units packed at the source's density (atlas::ChartShape::pinned), the others
-  // at the packing's scale, where the copies fit so: the alignment's rounding then shrinks
-  // the resampled units, not the copies, which stay bit-exact. Set for the mip-aligned
-  // variants (choose_layout); where the copies alone overfill the budget, every unit takes
-  // the one scale.
+  // at the packing's scale: the alignment's rounding then shrinks the resampled units, not
+  // the copies, which stay bit-exact. It moves texels from the resampled units to the copies
+  // (the unit-scale allocation's largest units), so it is kept only where one scale s would
+  // shrink the copies and pinning leaves the others at least s^2 (realize). Set for the
+  // mip-aligned variants (choose_layout).
   bool pin_copies = false;
   // Every chart flattened at one density instead (ReparamOptions::isometric).
   bool isometric = false;
@@ -743,7 +744,6 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
         for (uint32_t c : units[u]) unit_exact[u] &= char(new_uv_of[c] == charts[c].uv);
         shapes[u].snap = unit_exact[u] != 0;  // so that the atlas chosen has room for whole-texel origins
         shapes[u].align = mip_align;
-        shapes[u].pinned = cand.pin_copies && unit_exact[u];
         out.unreshaped_units += size_t(unit_exact[u]);
       }
     // The image edges: half the gutter on an axis a sampler repeats across, else none, but
@@ -763,10 +763,18 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
     budget.pack.edge_x = std::max(ring, atlas::edge_gutter(gutter, repeats[0]));
     budget.pack.edge_y = std::max(ring, atlas::edge_gutter(gutter, repeats[1]));
     atlas::AtlasChoice choice = atlas::choose_atlas(shapes, P.driver.width, P.driver.height, P.old_used, budget);
+    // Candidate::pin_copies: the copies at the source's density where one scale would shrink
+    // them. That gives them 1/s of the density the one scale s gives every unit; it is kept
+    // where it costs the other units no more than that factor (their scale at least s^2), so
+    // that a budget the copies alone nearly fill does not starve the rest.
     const auto is_pinned = [](const atlas::ChartShape& c) { return c.pinned; };
-    if (!choice.packing.ok && std::any_of(shapes.begin(), shapes.end(), is_pinned)) {  // the copies alone overfill it
-      for (atlas::ChartShape& c : shapes) c.pinned = false;
-      choice = atlas::choose_atlas(shapes, P.driver.width, P.driver.height, P.old_used, budget);
+    if (cand.pin_copies && choice.packing.ok && choice.packing.scale < 1 &&
+        std::find(unit_exact.begin(), unit_exact.end(), 1) != unit_exact.end()) {
+      std::vector<atlas::ChartShape> pinned_shapes = shapes;
+      for (size_t u = 0; u < units.size(); ++u) pinned_shapes[u].pinned = unit_exact[u] != 0;
+      atlas::AtlasChoice p = atlas::choose_atlas(pinned_shapes, P.driver.width, P.driver.height, P.old_used, budget);
+      const double s = choice.packing.scale;
+      if (p.packing.ok && p.packing.scale >= s * s) choice = std::move(p), shapes = std::move(pinned_shapes);
     }
     const bool pinned = std::any_of(shapes.begin(), shapes.end(), is_pinned);
     if (!choice.packing.ok)
@@ -901,7 +909,7 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
         if (!lsq.solved) warnings.push_back(cand.name + ": image " + std::to_string(i) + ": the least-squares bake did not converge");
       }
       // Unreshaped units: their texels copied from the source resized like a user would
-      // (Lanczos-3 in stored values), on the same grid. Only for images at the driver's
+      // (Lanczos-3 in stored values; pinned, the source itself), on the same grid. Only for images at the driver's
       // size (others are not on that grid) and not for normal maps (a quarter turn must
       // rotate their vectors: the re-bake does that).
       size_t copied = 0;
@@ -1494,10 +1502,11 @@ void choose_layout(Run& run, const std::vector<Candidate>& plans) {
   // Not under --size N (the sides would round up past the size asked for); under --pot the
   // sides are powers of two already, so only the copies' phase is varied; a plan whose
   // gutter allows no alignment (A = 1) is not varied at all. The copies stay at the
-  // source's density where they fit so (Candidate::pin_copies): Duck at half the texels,
-  // `unit-scale+least-squares+mip-aligned` q 0.000601 with its copies scaled to 0.937 of it
-  // and resampled, 0.000281 pinned (the resize 0.00066 at that atlas's shape); at 0.4 of the
-  // texels `unit-scale+wide-gutter+mip-aligned` 0.000578 -> 0.000171.
+  // source's density (Candidate::pin_copies): Duck at half the texels,
+  // `unit-scale+least-squares+mip-aligned` q 0.000601 with every unit at scale 0.961 (the
+  // copies resampled), 0.000281 with the copies at 1 and the rest at 0.937 (the resize
+  // 0.00066 at that atlas's shape); at 0.4 of the texels `unit-scale+wide-gutter+mip-aligned`
+  // 0.000578 -> 0.000171.
   auto with_alignment = [&](Candidate c, uint32_t depth) -> std::optional<Candidate> {
     c.name += depth == 1 ? "+mip-aligned" : "+mip-aligned-deep", c.mip_aligned = true, c.mip_depth = depth;
     c.pin_copies = true;

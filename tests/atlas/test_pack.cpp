@@ -229,7 +229,7 @@ TEST_CASE("pack: pinned charts stay at the source density, aligned, while the ot
   // A 40 x 40 chart copied from the source (snapped, at multiples of 8) and 24 others that
   // do not fit at scale 1: the bisection shrinks only the others.
   std::vector<ChartShape> charts = random_charts(24, 11);
-  ChartShape copy = rect(3.25, 5.5, 40, 40);
+  ChartShape copy = rect(11.25, 13.5, 40, 40);  // its snapped origin (8, 8): on the 8-texel phase
   copy.snap = true, copy.align = 8, copy.pinned = true;
   charts.insert(charts.begin() + 5, copy);
   PackOptions opt;
@@ -240,12 +240,13 @@ TEST_CASE("pack: pinned charts stay at the source density, aligned, while the ot
   for (size_t i = 0; i < charts.size(); ++i)
     if (i != 5) CHECK(p.placements[i].scale == p.scale);
   // Its points land at scale 1, moved by a whole multiple of 8 texels (any quarter turn).
-  const auto a = p.map(5, 3.25, 5.5), b = p.map(5, 43.25, 5.5), c = p.map(5, 3.25, 45.5);
+  const auto a = p.map(5, 11.25, 13.5), b = p.map(5, 51.25, 13.5), c = p.map(5, 11.25, 53.5);
   CHECK(std::hypot(b[0] - a[0], b[1] - a[1]) == Approx(40.0).epsilon(1e-12));
   CHECK(std::hypot(c[0] - a[0], c[1] - a[1]) == Approx(40.0).epsilon(1e-12));
   const ChartPlacement& pl = p.placements[5];
-  CHECK(pl.tx == std::round(pl.tx));
-  CHECK(pl.ty == std::round(pl.ty));
+  INFO("rotation " << pl.rotation << ", t (" << pl.tx << ", " << pl.ty << ")");
+  CHECK(std::fmod(pl.tx, 8.0) == 0.0);  // source texel (i, j) lands on an atlas texel of the same 8-phase
+  CHECK(std::fmod(pl.ty, 8.0) == 0.0);
   CHECK(pl.x % 8 == 0);
   CHECK(pl.y % 8 == 0);
   // The packing is valid as placed (footprints apart by the gutter, inside the image), and
@@ -265,7 +266,7 @@ TEST_CASE("pack: pinned charts stay at the source density, aligned, while the ot
   big[0].pinned = true;
   CHECK_FALSE(atlas::pack_max_scale(big, 128, 96, opt).ok);
   // Under a chart-texel budget (eq. 21) the pinned chart's texels are spent first, at 1,
-  // and the others' scale buys what is left: 1600 + s^2 * 4 * 400 = 0.5 * (1600 + 4 * 1600).
+  // and the others' scale buys what is left: 1600 + s^2 * 4 * 1600 = 0.5 * (1600 + 4 * 1600).
   std::vector<ChartShape> four = {copy, rect(0, 0, 40, 40), rect(0, 0, 40, 40), rect(0, 0, 40, 40), rect(0, 0, 40, 40)};
   atlas::BudgetOptions bo;
   bo.cost = 0.5;
@@ -276,6 +277,16 @@ TEST_CASE("pack: pinned charts stay at the source density, aligned, while the ot
   CHECK(choice.packing.placements[0].scale == 1.0);
   CHECK(choice.packing.scale == Approx(std::sqrt((0.5 * old_used - 1600) / 6400)).epsilon(1e-9));
   CHECK(choice.cost_ratio == Approx(0.5).epsilon(1e-6));
+  // A budget the pinned chart alone overspends buys nothing; every chart pinned, there is
+  // no scale to choose and the charts pack at 1.
+  bo.cost = 0.15;  // 1200 texels of chart, against the pinned chart's 1600
+  CHECK_FALSE(atlas::choose_atlas(four, 256, 256, old_used, bo).packing.ok);
+  for (ChartShape& ch : four) ch.pinned = true;
+  bo.cost = 1;
+  const auto all = atlas::choose_atlas(four, 256, 256, old_used, bo);
+  REQUIRE(all.packing.ok);
+  for (const ChartPlacement& q : all.packing.placements) CHECK(q.scale == 1.0);
+  CHECK(all.cost_ratio == Approx(1.0).epsilon(1e-9));
 }
 
 TEST_CASE("pack: atlas size from the budget", "[atlas]") {
