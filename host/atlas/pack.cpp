@@ -571,11 +571,11 @@ Packing pack_max_scale(const std::vector<ChartShape>& charts, uint32_t width, ui
     if (room <= 0) return Packing{};  // the pinned charts alone fill the image
     if (covered1 > 0) hi = std::min(hi, 1.05 * std::sqrt(room / covered1));
   }
-  // Pinned charts that do not fit beside the others at the smallest scale tried below fit
-  // at none: said at once, not after the descent's ~60 packings.
-  if (any_pinned && !pack_charts(charts, width, height, 1e-6, options).ok) return Packing{};
   Packing best = pack_charts(charts, width, height, hi, options);
   if (best.ok) return best;
+  // Pinned charts that do not fit beside the others at the smallest scale tried below fit
+  // at none: said at once, not after the descent's ~60 packings.
+  if (any_pinned && !pack_charts(charts, width, height, 1e-6, options).ok) return best;
   double fail = hi, lo = hi;
   for (;;) {  // find a scale that fits: packers rarely reach 80 % of the image, never 100 %
     lo *= 0.8;

@@ -965,9 +965,10 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
     lr.pinned_units = size_t(std::count_if(shapes.begin(), shapes.end(), is_pinned));
     lr.exact_texels = exact_texels;
     lr.atlas = {packing.width, packing.height};
-    lr.scale = packing.scale;
+    // Every unit pinned: no unit took the packing's scale (it is s_max then); they are at 1.
+    lr.scale = lr.pinned_units > 0 && lr.pinned_units == units.size() ? 1.0 : packing.scale;
     lr.scale_cap = s_max;
-    lr.capped_at_source_density = packing.scale >= 0.999 * s_max;
+    lr.capped_at_source_density = lr.scale >= 0.999 * s_max;
     lr.packing_efficiency = packing.efficiency;
     lr.gutter = gutter;
     lr.edge_gutter = {budget.pack.edge_x, budget.pack.edge_y};

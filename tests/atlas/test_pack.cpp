@@ -261,9 +261,12 @@ TEST_CASE("pack: pinned charts stay at the source density, aligned, while the ot
   REQUIRE(u.ok);
   CHECK(u.placements[5].scale == u.scale);
   CHECK(u.scale < 1.0);
-  // Pinned charts that alone overfill the image: no packing, at any scale of the others.
+  // Pinned charts that alone overfill the image, or that fit in area but not in shape (a
+  // 130-texel bar in a 128-texel image): no packing, at any scale of the others.
   std::vector<ChartShape> big = {rect(0, 0, 200, 200), rect(0, 0, 10, 10)};
   big[0].pinned = true;
+  CHECK_FALSE(atlas::pack_max_scale(big, 128, 96, opt).ok);
+  big[0] = rect(0, 0, 130, 10), big[0].pinned = true;
   CHECK_FALSE(atlas::pack_max_scale(big, 128, 96, opt).ok);
   // Under a chart-texel budget (eq. 21) the pinned chart's texels are spent first, at 1,
   // and the others' scale buys what is left: 1600 + s^2 * 4 * 1600 = 0.5 * (1600 + 4 * 1600).
@@ -283,10 +286,13 @@ TEST_CASE("pack: pinned charts stay at the source density, aligned, while the ot
   CHECK_FALSE(atlas::choose_atlas(four, 256, 256, old_used, bo).packing.ok);
   for (ChartShape& ch : four) ch.pinned = true;
   bo.cost = 1;
+  bo.s_max = 2;  // the packing's scale is then s_max: the placements must still say 1
   const auto all = atlas::choose_atlas(four, 256, 256, old_used, bo);
   REQUIRE(all.packing.ok);
   for (const ChartPlacement& q : all.packing.placements) CHECK(q.scale == 1.0);
   CHECK(all.cost_ratio == Approx(1.0).epsilon(1e-9));
+  bo.cost = 0.9;  // every chart pinned and the budget short of them
+  CHECK_FALSE(atlas::choose_atlas(four, 256, 256, old_used, bo).packing.ok);
 }
 
 TEST_CASE("pack: atlas size from the budget", "[atlas]") {
