@@ -378,10 +378,10 @@ struct Candidate {
   uint32_t mip_depth = 1;  // sides multiples of mip_depth * A (2: one level cleaner than the gutter)
   // The copied units packed at the source's density (atlas::ChartShape::pinned), the others
   // at the packing's scale: the alignment's rounding then shrinks the resampled units, not
-  // the copies, which stay bit-exact. It moves texels from the resampled units to the copies
-  // (the unit-scale allocation's largest units), so it is kept only where one scale s would
-  // shrink the copies and pinning leaves the others at least s^2 (realize). Set for the
-  // mip-aligned variants (choose_layout).
+  // the copies, which stay bit-exact. It also moves texels from the resampled units to the
+  // copies (the unit-scale allocation's largest units), so wherever it pins anything the
+  // variant is built with one scale for all as well, and the score decides (choose_layout).
+  // Where the copies alone overfill the budget, every unit takes the one scale.
   bool pin_copies = false;
   // Every chart flattened at one density instead (ReparamOptions::isometric).
   bool isometric = false;
@@ -402,6 +402,7 @@ struct Realized {
   size_t overlaps_new = 0;           // triangle pairs overlapping in the written UVs, not in the input's
   size_t overlap_fallback_charts = 0;  // charts kept at their input shape because their fit overlapped
   size_t unreshaped_units = 0;       // units whose texels could be copied (cand.exact), before snapping
+  size_t pinned_units = 0;           // units packed at the source's density (Candidate::pin_copies)
   double t_mesh = 0, t_pack = 0, t_bake = 0;
   double q = -1;                     // 20-view GMSD of the file as written (-1: not scored)
   // Images encoded as drafts (io::EncodeSettings::draft), with their texels: encoded for
@@ -762,21 +763,17 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
     }
     budget.pack.edge_x = std::max(ring, atlas::edge_gutter(gutter, repeats[0]));
     budget.pack.edge_y = std::max(ring, atlas::edge_gutter(gutter, repeats[1]));
-    atlas::AtlasChoice choice = atlas::choose_atlas(shapes, P.driver.width, P.driver.height, P.old_used, budget);
-    // Candidate::pin_copies: the copies at the source's density where one scale would shrink
-    // them. That gives them 1/s of the density the one scale s gives every unit; it is kept
-    // where it costs the other units no more than that factor (their scale at least s^2), so
-    // that a budget the copies alone nearly fill does not starve the rest.
+    // Candidate::pin_copies: the copies at the source's density, the other units at the
+    // packing's scale; one scale for all where the copies alone overfill the budget.
+    for (size_t u = 0; u < units.size(); ++u) shapes[u].pinned = cand.pin_copies && unit_exact[u];
     const auto is_pinned = [](const atlas::ChartShape& c) { return c.pinned; };
-    if (cand.pin_copies && choice.packing.ok && choice.packing.scale < 1 &&
-        std::find(unit_exact.begin(), unit_exact.end(), 1) != unit_exact.end()) {
-      std::vector<atlas::ChartShape> pinned_shapes = shapes;
-      for (size_t u = 0; u < units.size(); ++u) pinned_shapes[u].pinned = unit_exact[u] != 0;
-      atlas::AtlasChoice p = atlas::choose_atlas(pinned_shapes, P.driver.width, P.driver.height, P.old_used, budget);
-      const double s = choice.packing.scale;
-      if (p.packing.ok && p.packing.scale >= s * s) choice = std::move(p), shapes = std::move(pinned_shapes);
+    atlas::AtlasChoice choice = atlas::choose_atlas(shapes, P.driver.width, P.driver.height, P.old_used, budget);
+    if (!choice.packing.ok && std::any_of(shapes.begin(), shapes.end(), is_pinned)) {
+      for (atlas::ChartShape& c : shapes) c.pinned = false;
+      choice = atlas::choose_atlas(shapes, P.driver.width, P.driver.height, P.old_used, budget);
     }
     const bool pinned = std::any_of(shapes.begin(), shapes.end(), is_pinned);
+    out.pinned_units += size_t(std::count_if(shapes.begin(), shapes.end(), is_pinned));
     if (!choice.packing.ok)
       throw InputError(file.path, "the charts of layout " + std::to_string(li) + " do not fit any atlas within the budget");
     // Units whose charts keep their shape keep their texels (atlas/place_texels.h): the
@@ -1385,9 +1382,15 @@ double score_far(Run& run, const io::GltfFile& f) {
   return q;
 }
 
+// What building a candidate showed, for the variants built from it.
+struct Considered {
+  size_t unreshaped = 0;  // Realized::unreshaped_units
+  size_t pinned = 0;      // Realized::pinned_units
+};
+
 // Builds a candidate into a copy of the input, scores it, and keeps it (in run.file) when
-// it is the first or scores better. Returns its unreshaped units (Realized::unreshaped_units).
-size_t consider_candidate(Run& run, const Candidate& c) {
+// it is the first or scores better.
+Considered consider_candidate(Run& run, const Candidate& c) {
   io::GltfFile f = run.original;
   const Stopwatch t0;
   Realized r = realize(run.asset, run.layouts, run.prepared, run.layout_base, f, run.engine, run.o, c, run.progress,
@@ -1397,12 +1400,12 @@ size_t consider_candidate(Run& run, const Candidate& c) {
   if (run.scorer && r.overlaps_new == 0) r.q = score(run, f, r.name).q;
   run.result.candidates.push_back({r.name, r.old_texels > 0 ? r.new_texels / r.old_texels : 1.0, r.q, r.overlaps_new,
                                    r.t_mesh, r.t_pack, r.t_bake, t1.seconds()});
-  const size_t unreshaped = r.unreshaped_units;
+  const Considered seen{r.unreshaped_units, r.pinned_units};
   // New UV overlaps disqualify a layout whatever its score: never written.
-  if (r.overlaps_new > 0) return unreshaped;
+  if (r.overlaps_new > 0) return seen;
   const bool have = !run.chosen.name.empty();
   if (!have || (r.q >= 0 && r.q < run.chosen.q)) run.chosen = std::move(r), run.file = std::move(f), run.chosen_plan = c;
-  return unreshaped;
+  return seen;
 }
 
 // Every plan built and scored, the best kept; then the kept layout with the least-squares
@@ -1416,7 +1419,7 @@ void choose_layout(Run& run, const std::vector<Candidate>& plans) {
   std::vector<std::pair<double, size_t>> base_scores;
   std::vector<size_t> copies_of(plans.size(), 0);  // units each base plan copies
   for (size_t i = 0; i < plans.size(); ++i) {
-    copies_of[i] = consider(plans[i]);
+    copies_of[i] = consider(plans[i]).unreshaped;
     const CandidateScore& scored = run.result.candidates.back();
     if (scored.q >= 0 && scored.overlaps_new == 0) base_scores.push_back({scored.q, i});
   }
@@ -1457,7 +1460,7 @@ void choose_layout(Run& run, const std::vector<Candidate>& plans) {
       Candidate c = kept;
       c.name += exact ? "+least-squares" : "+least-squares-resampled";
       c.bake = Candidate::Bake::LeastSquares, c.exact = exact;
-      unreshaped = consider(c);
+      unreshaped = consider(c).unreshaped;
     }
   }
   // The kept layout once more with gutters a mip level cleaner. Which costs less on screen,
@@ -1503,7 +1506,8 @@ void choose_layout(Run& run, const std::vector<Candidate>& plans) {
   // Not under --size N (the sides would round up past the size asked for); under --pot the
   // sides are powers of two already, so only the copies' phase is varied; a plan whose
   // gutter allows no alignment (A = 1) is not varied at all. The copies stay at the
-  // source's density (Candidate::pin_copies): Duck at half the texels,
+  // source's density (Candidate::pin_copies), and where that pins any the variant is built
+  // with one scale too (`-one-scale`): Duck at half the texels,
   // `unit-scale+least-squares+mip-aligned` q 0.000601 with every unit at scale 0.961 (the
   // copies resampled), 0.000281 with the copies at 1 and the rest at 0.937 (the resize
   // 0.00066 at that atlas's shape); at 0.4 of the texels `unit-scale+wide-gutter+mip-aligned`
@@ -1525,8 +1529,13 @@ void choose_layout(Run& run, const std::vector<Candidate>& plans) {
     if (!others.empty() && other_copies > 0)
       if (auto c = with_alignment(others[0], 1)) aligned.push_back(*c);
     for (const Candidate& c : aligned) {
-      consider(c);
+      const Considered seen = consider(c);
       run.curve_plans.push_back(c);
+      if (seen.pinned == 0) continue;  // nothing pinned: it was built with one scale already
+      Candidate one = c;
+      one.name += "-one-scale", one.pin_copies = false;
+      consider(one);
+      run.curve_plans.push_back(one);
     }
   }
 }

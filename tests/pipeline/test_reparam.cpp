@@ -527,11 +527,20 @@ TEST_CASE("reparam on Duck at half the texels: gutters and mip alignment built, 
   CHECK(q_resampled > 0);
   CHECK(q_resampled != q_copied);
   // The kept plan copies units, so it is also built with the mip chain kept whole (both
-  // depths), and the best other plan too.
-  CHECK(best_aligned(report).second == 3);
-  // An aligned variant with its copies pinned wins (measured: `unit-scale+least-squares+
-  // mip-aligned` 0.000281, the next 0.000367).
+  // depths), and the best other plan too; the kept plan's two pin its copies at the source's
+  // density, so each is built with one scale for all as well (`-one-scale`), and pinned
+  // scores better (measured: 0.000281 against 0.000601 at A, 0.000333 against 0.000367 at 2A).
+  CHECK(best_aligned(report).second == 5);
+  for (const char* depth : {"+mip-aligned", "+mip-aligned-deep"}) {
+    const std::string pinned = lsq + depth;
+    INFO(pinned);
+    const double q_pinned = candidate_score(report, pinned).first, q_one = candidate_score(report, pinned + "-one-scale").first;
+    CHECK(q_pinned > 0);
+    CHECK(q_one > 0);
+    CHECK(q_pinned < q_one);
+  }
   CHECK(best.find("+mip-aligned") != std::string::npos);
+  CHECK(best.find("-one-scale") == std::string::npos);
   if (best.find("+mip-aligned") != std::string::npos) {
     const pipeline::LayoutReport& l = result.layouts[0];
     CHECK(l.mip_align == l.gutter);  // 8 or 16: powers of two
