@@ -906,9 +906,9 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
         if (!lsq.solved) warnings.push_back(cand.name + ": image " + std::to_string(i) + ": the least-squares bake did not converge");
       }
       // Unreshaped units: their texels copied from the source resized like a user would
-      // (Lanczos-3 in stored values; pinned, the source itself), on the same grid. Only for images at the driver's
-      // size (others are not on that grid) and not for normal maps (a quarter turn must
-      // rotate their vectors: the re-bake does that).
+      // (Lanczos-3 in stored values; pinned, the source itself), on the same grid. Only for
+      // images at the driver's size (others are not on that grid) and not for normal maps (a
+      // quarter turn must rotate their vectors: the re-bake does that).
       size_t copied = 0;
       if (copies) {
         const Image resized = Rw == source.width && Rh == source.height ? source : eval::resize_lanczos3(source, Rw, Rh, false);
