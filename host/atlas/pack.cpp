@@ -544,6 +544,14 @@ double chart_area(const std::vector<ChartShape>& charts) {
   return area;
 }
 
+// ... of the pinned charts (ChartShape::pinned), or of the others.
+double chart_area(const std::vector<ChartShape>& charts, bool pinned) {
+  double area = 0;
+  for (const auto& c : charts)
+    if (c.pinned == pinned) area += chart_area(c);
+  return area;
+}
+
 }  // namespace
 
 Packing pack_max_scale(const std::vector<ChartShape>& charts, uint32_t width, uint32_t height,
@@ -554,11 +562,8 @@ Packing pack_max_scale(const std::vector<ChartShape>& charts, uint32_t width, ui
   // bound where charts share texels.)
   // Pinned charts take their texels at every scale: the bound is the scale at which the
   // others fill what they leave.
-  double area1 = 0;  // of the charts not pinned, at scale 1, overlaps counted twice
-  bool any_pinned = false;
-  for (const ChartShape& c : charts)
-    if (c.pinned) any_pinned = true;
-    else area1 += chart_area(c);
+  const double area1 = chart_area(charts, false);  // the charts not pinned, at scale 1 (overlaps twice)
+  const bool any_pinned = std::any_of(charts.begin(), charts.end(), [](const ChartShape& c) { return c.pinned; });
   if (any_pinned && area1 <= 0) return pack_charts(charts, width, height, s_max, options);  // no scale to choose
   double hi = s_max;
   if (area1 > 0) {
@@ -721,9 +726,7 @@ Packing choose_at_aspect(const std::vector<ChartShape>& charts, double area1, ui
     p = pack_max_scale(charts, d[0], d[1], o.pack, o.s_max);
   } else if (o.measure == CostMeasure::ChartTexels && old_used_texels > 0 && area1 > 0) {
     // Pinned charts keep their area (scale 1); the others' scale spends what is left.
-    double pinned = 0;
-    for (const ChartShape& c : charts)
-      if (c.pinned) pinned += chart_area(c);
+    const double pinned = chart_area(charts, true);
     const double left = o.cost * old_used_texels - pinned;
     if (left < 0 || (area1 > pinned && left <= 0)) return p;  // the pinned charts alone overspend the budget
     const double s = area1 > pinned ? std::min(o.s_max, std::sqrt(left / (area1 - pinned))) : o.s_max;

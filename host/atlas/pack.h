@@ -163,10 +163,9 @@ struct AtlasChoice {
 //    source aspect; the scale is the largest that fits (<= s_max).
 //  - ChartTexels: scale = min(s_max, sqrt(cost * old_used / chart area)) (pinned charts: their
 //    area at scale 1 spent first, the scale from what is left of the budget; none left: ok =
-//    false), then the smallest
-//    atlas of the source aspect that holds the charts at that scale; with pot, the
-//    power-of-two size nearest (in log area) to that atlas, and the scale is then re-fitted
-//    to it (so c_r is only approximate with pot).
+//    false), then the smallest atlas of the source aspect that holds the charts at that
+//    scale; with pot, the power-of-two size nearest (in log area) to that atlas, and the
+//    scale is then re-fitted to it (so c_r is only approximate with pot).
 //  - ImageTexels: width * height <= cost * old_width * old_height (the shape's largest within
 //    it: where both sides rounded would exceed it, the shorter side gives way, or the longer
 //    one by a block if that keeps more), then the largest scale;

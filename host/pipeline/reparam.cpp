@@ -772,8 +772,9 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
       for (atlas::ChartShape& c : shapes) c.pinned = false;
       choice = atlas::choose_atlas(shapes, P.driver.width, P.driver.height, P.old_used, budget);
     }
-    const bool pinned = std::any_of(shapes.begin(), shapes.end(), is_pinned);
-    out.pinned_units += size_t(std::count_if(shapes.begin(), shapes.end(), is_pinned));
+    const size_t pinned_units = size_t(std::count_if(shapes.begin(), shapes.end(), is_pinned));
+    const bool pinned = pinned_units > 0;
+    out.pinned_units += pinned_units;
     if (!choice.packing.ok)
       throw InputError(file.path, "the charts of layout " + std::to_string(li) + " do not fit any atlas within the budget");
     // Units whose charts keep their shape keep their texels (atlas/place_texels.h): the
@@ -959,7 +960,7 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
     lr.shared_texel_charts = P.shared_charts;
     lr.packing_units = units.size();
     lr.exact_units = size_t(std::count(unit_exact.begin(), unit_exact.end(), 1));
-    lr.pinned_units = size_t(std::count_if(shapes.begin(), shapes.end(), is_pinned));
+    lr.pinned_units = pinned_units;
     lr.exact_texels = exact_texels;
     lr.atlas = {packing.width, packing.height};
     // Every unit pinned: no unit took the packing's scale (it is s_max then); they are at 1.
