@@ -5,10 +5,12 @@
 
 #include "core/image.h"
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace uvpress::io {
 
@@ -34,6 +36,10 @@ inline float unorm_to_float(uint32_t v, uint32_t largest) { return float(v) * (1
 // warnings are not printed; its errors throw DecodeError. Chunks after the image data are
 // not read (OpenImageIO read them for interlaced files only, and refused a damaged tail).
 Image decode_png(const uint8_t* bytes, size_t size, bool header_only, uint32_t max_side);
+
+// A paletted PNG's palette (PLTE, with tRNS's alpha; 255 where tRNS says nothing), in
+// entry order; empty for any other PNG, and for bytes libpng cannot read up to the image data.
+std::vector<std::array<uint8_t, 4>> read_png_palette(const uint8_t* bytes, size_t size);
 
 // JPEG (io/jpeg_decode.cpp): libjpeg's default decode (islow IDCT, fancy upsampling) to
 // grey or RGB, 8 bits; CMYK and YCCK files become RGB as C*K, M*K, Y*K of the stored

@@ -111,6 +111,7 @@ EncodeSettings encode_settings_of(const std::vector<uint8_t>& bytes) {
     // IHDR's colour type (byte 25 of the file): 3 is indexed colour.
     const bool header = bytes.size() >= 26 && std::memcmp(&bytes[12], "IHDR", 4) == 0;
     s.palette = header && bytes[25] == 3;
+    if (s.palette) s.palette_colours = read_png_palette(bytes.data(), bytes.size());
     // 8-bit RGB or RGBA: a palette where it loses (almost) nothing (PngOptions). Grey keeps
     // its one byte a texel.
     s.palette_when_faithful = header && (bytes[25] == 2 || bytes[25] == 6) && bytes[24] == 8;
@@ -149,6 +150,7 @@ std::vector<uint8_t> encode_image(const Image& image, const EncodeSettings& sett
   if (settings.format == "png") {
     PngOptions o;
     o.palette = settings.palette;
+    o.fixed_palette = settings.palette_colours;
     o.palette_when_faithful = settings.palette_when_faithful;
     o.draft = settings.draft;
     return encode_png(image, o);

@@ -5,6 +5,7 @@
 
 #include "core/image.h"
 
+#include <array>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -38,6 +39,9 @@ Image decode_image(const std::vector<uint8_t>& bytes, const std::string& name);
 struct EncodeSettings {
   std::string format = "png";  // "png" | "jpeg"
   bool palette = false;        // PNG: an 8-bit palette (the input was paletted)
+  // PNG with palette: the input's own palette (RGBA, entry order), drawn from and no other
+  // colour (PngOptions::fixed_palette); empty: a new palette for the new texels.
+  std::vector<std::array<uint8_t, 4>> palette_colours;
   bool palette_when_faithful = false;  // PNG: a palette where it is near-lossless (PngOptions; 8-bit truecolour inputs)
   int jpeg_quality = 95;       // JPEG: IJG quality, estimated from the input's tables
   int jpeg_h_sampling = 2, jpeg_v_sampling = 2;  // JPEG: luma sampling factors (2, 2: 4:2:0)

@@ -4,6 +4,7 @@
 
 #include <memory>
 #include <stdexcept>
+#include <string>
 
 namespace uvpress::io {
 
@@ -17,15 +18,21 @@ struct Free {
 
 }  // namespace
 
-PaletteImage quantize_palette(const uint8_t* rgba, uint32_t width, uint32_t height, float dithering) {
+PaletteImage quantize_palette(const uint8_t* rgba, uint32_t width, uint32_t height, float dithering,
+                              const std::vector<std::array<uint8_t, 4>>& fixed) {
+  if (fixed.size() > 256) throw std::invalid_argument("quantize_palette: more than 256 fixed colours");
   std::unique_ptr<liq_attr, Free> attr(liq_attr_create());
   if (!attr) throw std::runtime_error("libimagequant: out of memory");
-  liq_set_max_colors(attr.get(), 256);
+  // Fixed colours are reserved in the palette; with no room for more, they are the palette.
+  liq_set_max_colors(attr.get(), fixed.empty() ? 256 : int(fixed.size()));
   // Speed 1 (the slowest, best palette): textures are few and a palette is chosen once.
   liq_set_speed(attr.get(), 1);
   // Gamma 0: libimagequant's default (sRGB-like), which is how colour textures are stored.
   std::unique_ptr<liq_image, Free> image(liq_image_create_rgba(attr.get(), rgba, int(width), int(height), 0));
   if (!image) throw std::runtime_error("libimagequant: cannot take a " + std::to_string(width) + "x" + std::to_string(height) + " image");
+  for (const auto& c : fixed)
+    if (liq_image_add_fixed_color(image.get(), liq_color{c[0], c[1], c[2], c[3]}) != LIQ_OK)
+      throw std::runtime_error("libimagequant: cannot reserve a palette colour");
   liq_result* raw = nullptr;
   if (liq_image_quantize(image.get(), attr.get(), &raw) != LIQ_OK || !raw) throw std::runtime_error("libimagequant: quantization failed");
   std::unique_ptr<liq_result, Free> result(raw);

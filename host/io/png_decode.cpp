@@ -35,6 +35,15 @@ void on_png_read_error(png_structp png, png_const_charp message) {
 }
 void on_png_read_warning(png_structp, png_const_charp) {}
 
+// No ancillary chunk changes the texels (no gamma or colour conversion is applied), so
+// libpng skips them unread rather than allocating what they declare: its tEXt handler
+// allocated and zeroed a declared 1 GiB before finding the file 367 bytes long (the
+// fuzzer's find: 8 s). tRNS is kept: it becomes the alpha channel.
+void skip_ancillary_chunks(png_structp png) {
+  static const png_byte skipped[] = "bKGD\0cHRM\0eXIf\0gAMA\0hIST\0iCCP\0iTXt\0oFFs\0pCAL\0pHYs\0sBIT\0sCAL\0sPLT\0sRGB\0tEXt\0tIME\0zTXt";
+  png_set_keep_unknown_chunks(png, PNG_HANDLE_CHUNK_NEVER, skipped, int(sizeof skipped / 5));
+}
+
 struct PngLayout {
   png_uint_32 width = 0, height = 0;
   int bit_depth = 0, channels = 0;
@@ -47,12 +56,7 @@ struct PngLayout {
 // there).
 bool read_png_layout(png_structp png, png_infop info, PngLayout* out) {
   if (setjmp(png_jmpbuf(png))) return false;
-  // No ancillary chunk changes the texels (no gamma or colour conversion is applied), so
-  // libpng skips them unread rather than allocating what they declare: its tEXt handler
-  // allocated and zeroed a declared 1 GiB before finding the file 367 bytes long (the
-  // fuzzer's find: 8 s). tRNS is kept: it becomes the alpha channel.
-  static const png_byte skipped[] = "bKGD\0cHRM\0eXIf\0gAMA\0hIST\0iCCP\0iTXt\0oFFs\0pCAL\0pHYs\0sBIT\0sCAL\0sPLT\0sRGB\0tEXt\0tIME\0zTXt";
-  png_set_keep_unknown_chunks(png, PNG_HANDLE_CHUNK_NEVER, skipped, int(sizeof skipped / 5));
+  skip_ancillary_chunks(png);
   png_read_info(png, info);
   out->width = png_get_image_width(png, info);
   out->height = png_get_image_height(png, info);
@@ -71,6 +75,24 @@ bool read_png_layout(png_structp png, png_infop info, PngLayout* out) {
 bool read_png_rows(png_structp png, png_bytepp rows) {
   if (setjmp(png_jmpbuf(png))) return false;
   png_read_image(png, rows);
+  return true;
+}
+
+// PLTE and tRNS, read with the header (both come before the image data).
+bool read_png_palette_chunks(png_structp png, png_infop info, std::vector<std::array<uint8_t, 4>>* out) {
+  if (setjmp(png_jmpbuf(png))) return false;
+  skip_ancillary_chunks(png);
+  png_read_info(png, info);
+  if (png_get_color_type(png, info) != PNG_COLOR_TYPE_PALETTE) return true;
+  png_colorp colours = nullptr;
+  int count = 0;
+  if (!png_get_PLTE(png, info, &colours, &count) || !colours || count <= 0) return true;
+  png_bytep alpha = nullptr;
+  int alphas = 0;
+  png_color_16p unused = nullptr;
+  if (!png_get_tRNS(png, info, &alpha, &alphas, &unused)) alpha = nullptr, alphas = 0;
+  for (int i = 0; i < count && i < 256; ++i)
+    out->push_back({colours[i].red, colours[i].green, colours[i].blue, alpha && i < alphas ? alpha[i] : png_byte(255)});
   return true;
 }
 
@@ -126,6 +148,19 @@ Image decode_png(const uint8_t* bytes, size_t size, bool header_only, uint32_t m
       image.pixels[i] = unorm_to_float(uint32_t(stored[2 * i]) << 8 | stored[2 * i + 1], 65535);
   }
   return image;
+}
+
+std::vector<std::array<uint8_t, 4>> read_png_palette(const uint8_t* bytes, size_t size) {
+  PngSource src;
+  src.data = bytes, src.size = size;
+  PngReadStruct rs;
+  rs.png = png_create_read_struct(PNG_LIBPNG_VER_STRING, &src, on_png_read_error, on_png_read_warning);
+  if (rs.png) rs.info = png_create_info_struct(rs.png);
+  if (!rs.png || !rs.info) throw std::bad_alloc();
+  png_set_read_fn(rs.png, &src, read_png_bytes);
+  std::vector<std::array<uint8_t, 4>> palette;
+  if (!read_png_palette_chunks(rs.png, rs.info, &palette)) palette.clear();
+  return palette;
 }
 
 }  // namespace uvpress::io

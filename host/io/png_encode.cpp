@@ -2,6 +2,7 @@
 
 #include "io/palette_quantize.h"
 
+#include <libdeflate.h>
 #include <png.h>
 #include <zlib.h>
 
@@ -9,6 +10,7 @@
 #include <cmath>
 #include <csetjmp>
 #include <cstring>
+#include <memory>
 #include <stdexcept>
 #include <string>
 
@@ -82,7 +84,7 @@ bool opaque(const Image& img) {
   return true;
 }
 
-Rows palette_rows(const Image& img, bool keep_alpha, float dithering) {
+Rows palette_rows(const Image& img, bool keep_alpha, float dithering, const std::vector<std::array<uint8_t, 4>>& fixed) {
   const size_t n = size_t(img.width) * img.height;
   std::vector<uint8_t> rgba(n * 4);
   auto to8 = [](float v) { return uint8_t(std::lround(std::clamp(v, 0.0f, 1.0f) * 255.0f)); };
@@ -92,7 +94,7 @@ Rows palette_rows(const Image& img, bool keep_alpha, float dithering) {
     for (int c = 0; c < 3; ++c) rgba[4 * i + size_t(c)] = to8(grey ? p[0] : p[c]);
     rgba[4 * i + 3] = keep_alpha ? to8(p[img.channels - 1]) : 255;
   }
-  PaletteImage q = quantize_palette(rgba.data(), img.width, img.height, dithering);
+  PaletteImage q = quantize_palette(rgba.data(), img.width, img.height, fixed.empty() ? dithering : 0.0f, fixed);
   // Translucent entries first, so that tRNS lists only them.
   std::vector<uint8_t> order(q.palette.size());
   for (size_t i = 0; i < order.size(); ++i) order[i] = uint8_t(i);
@@ -148,6 +150,57 @@ Rows direct_rows(const Image& img, bool keep_alpha) {
   return r;
 }
 
+uint32_t be32(const uint8_t* p) { return uint32_t(p[0]) << 24 | uint32_t(p[1]) << 16 | uint32_t(p[2]) << 8 | p[3]; }
+void put_be32(std::vector<uint8_t>& out, uint32_t v) {
+  for (int s = 24; s >= 0; s -= 8) out.push_back(uint8_t(v >> s));
+}
+
+struct FreeCompressor {
+  void operator()(libdeflate_compressor* c) const { libdeflate_free_compressor(c); }
+};
+
+// The image data of a PNG that libpng wrote (its IDAT chunks: one zlib stream of the
+// filtered rows), deflated again by libdeflate at its strongest level, 12, whose
+// near-optimal parsing zlib's level 9 lacks: the same rows, the same decoded texels, in
+// ~10 % fewer bytes (Duck's re-baked palette image: 9,616 -> 8,703). `png` as it was where
+// that is not smaller.
+std::vector<uint8_t> recompress_image_data(std::vector<uint8_t> png) {
+  // Chunks: length, type, data, CRC. libpng writes IHDR first and the IDATs in one run.
+  size_t first = 0, last = 0;
+  std::vector<uint8_t> stream;
+  for (size_t at = 8; at + 12 <= png.size();) {
+    const size_t n = be32(&png[at]);
+    if (at + 12 + n > png.size()) return png;
+    if (std::memcmp(&png[at + 4], "IDAT", 4) == 0) {
+      if (!first) first = at;
+      last = at + 12 + n;
+      stream.insert(stream.end(), png.begin() + long(at + 8), png.begin() + long(at + 8 + n));
+    }
+    at += 12 + n;
+  }
+  if (!first || png.size() < 33) return png;
+  // The filtered rows' size, from IHDR: a filter byte and ceil(width * bits a texel / 8).
+  const uint32_t width = be32(&png[16]), height = be32(&png[20]);
+  const int depth = png[24], colour = png[25];
+  const int channels = colour == PNG_COLOR_TYPE_RGB ? 3 : colour == PNG_COLOR_TYPE_RGBA ? 4 : colour == PNG_COLOR_TYPE_GRAY_ALPHA ? 2 : 1;
+  std::vector<uint8_t> rows(size_t(height) * (1 + (size_t(width) * size_t(channels * depth) + 7) / 8));
+  uLongf got = uLongf(rows.size());
+  if (uncompress(rows.data(), &got, stream.data(), uLong(stream.size())) != Z_OK || got != rows.size()) return png;
+  std::unique_ptr<libdeflate_compressor, FreeCompressor> c(libdeflate_alloc_compressor(12));
+  if (!c) return png;
+  std::vector<uint8_t> deflated(libdeflate_zlib_compress_bound(c.get(), rows.size()));
+  const size_t size = libdeflate_zlib_compress(c.get(), rows.data(), rows.size(), deflated.data(), deflated.size());
+  if (size == 0 || size >= stream.size()) return png;
+  std::vector<uint8_t> out(png.begin(), png.begin() + long(first));
+  put_be32(out, uint32_t(size));
+  const size_t type_at = out.size();
+  out.insert(out.end(), {'I', 'D', 'A', 'T'});
+  out.insert(out.end(), deflated.begin(), deflated.begin() + long(size));
+  put_be32(out, uint32_t(crc32(0, out.data() + type_at, uInt(4 + size))));
+  out.insert(out.end(), png.begin() + long(last), png.end());
+  return out;
+}
+
 }  // namespace
 
 std::vector<uint8_t> encode_png(const Image& image, const PngOptions& options) {
@@ -156,14 +209,17 @@ std::vector<uint8_t> encode_png(const Image& image, const PngOptions& options) {
     throw std::invalid_argument("encode_png: inconsistent image");
   const bool keep_alpha = !opaque(image);
   const bool palette = (options.palette || options.palette_when_faithful) && image.bits != 16;
-  Rows rows = palette ? palette_rows(image, keep_alpha, options.palette ? options.dithering : 0.0f) : direct_rows(image, keep_alpha);
+  Rows rows = palette ? palette_rows(image, keep_alpha, options.palette ? options.dithering : 0.0f,
+                                     options.palette ? options.fixed_palette : std::vector<std::array<uint8_t, 4>>{})
+                      : direct_rows(image, keep_alpha);
   if (!options.palette && palette && rows.rms > kFaithfulPaletteRms) rows = direct_rows(image, keep_alpha);
   // libpng's adaptive choice per row (minimum sum of absolute differences) is a heuristic:
   // on smooth colour it wins, on palettes and flat areas no filter often does. Try both,
   // and Paeth alone, and keep the smallest.
   const int filters[] = {PNG_ALL_FILTERS, PNG_FILTER_NONE, PNG_FILTER_PAETH};
   const size_t tries = options.draft ? 1 : 3;
-  const int level = options.draft ? Z_BEST_SPEED : Z_BEST_COMPRESSION;
+  // zlib's fastest level where libdeflate deflates the rows again (recompress_image_data).
+  const int level = Z_BEST_SPEED;
   std::vector<uint8_t> best;
   std::string error;
   for (size_t k = 0; k < tries; ++k) {
@@ -173,6 +229,7 @@ std::vector<uint8_t> encode_png(const Image& image, const PngOptions& options) {
       error = sink.error;
       continue;
     }
+    if (!options.draft) sink.bytes = recompress_image_data(std::move(sink.bytes));
     if (best.empty() || sink.bytes.size() < best.size()) best = std::move(sink.bytes);
   }
   if (best.empty()) throw std::runtime_error("encoding png failed: " + error);
