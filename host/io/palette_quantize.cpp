@@ -21,10 +21,17 @@ struct Free {
 PaletteImage quantize_palette(const uint8_t* rgba, uint32_t width, uint32_t height, float dithering,
                               const std::vector<std::array<uint8_t, 4>>& fixed) {
   if (fixed.size() > 256) throw std::invalid_argument("quantize_palette: more than 256 fixed colours");
+  PaletteImage out;
+  out.indices.resize(size_t(width) * height);
+  if (fixed.size() == 1) {  // libimagequant's palettes have 2 entries or more
+    out.palette = fixed;
+    return out;
+  }
   std::unique_ptr<liq_attr, Free> attr(liq_attr_create());
   if (!attr) throw std::runtime_error("libimagequant: out of memory");
   // Fixed colours are reserved in the palette; with no room for more, they are the palette.
-  liq_set_max_colors(attr.get(), fixed.empty() ? 256 : int(fixed.size()));
+  if (liq_set_max_colors(attr.get(), fixed.empty() ? 256 : int(fixed.size())) != LIQ_OK)
+    throw std::runtime_error("libimagequant: cannot set the palette's size");
   // Speed 1 (the slowest, best palette): textures are few and a palette is chosen once.
   liq_set_speed(attr.get(), 1);
   // Gamma 0: libimagequant's default (sRGB-like), which is how colour textures are stored.
@@ -37,13 +44,20 @@ PaletteImage quantize_palette(const uint8_t* rgba, uint32_t width, uint32_t heig
   if (liq_image_quantize(image.get(), attr.get(), &raw) != LIQ_OK || !raw) throw std::runtime_error("libimagequant: quantization failed");
   std::unique_ptr<liq_result, Free> result(raw);
   liq_set_dithering_level(result.get(), dithering);
-  PaletteImage out;
-  out.indices.resize(size_t(width) * height);
   if (liq_write_remapped_image(result.get(), image.get(), out.indices.data(), out.indices.size()) != LIQ_OK)
     throw std::runtime_error("libimagequant: remapping failed");
   const liq_palette* palette = liq_get_palette(result.get());
   for (unsigned i = 0; i < palette->count; ++i)
     out.palette.push_back({palette->entries[i].r, palette->entries[i].g, palette->entries[i].b, palette->entries[i].a});
+  if (!fixed.empty()) {
+    // Every entry fixed, libimagequant keeps them in order, but gives an entry of alpha 0
+    // back as (0, 0, 0, 0): the input's own entries are written, whose colour a renderer
+    // still filters into its neighbours.
+    bool same = out.palette.size() == fixed.size();
+    for (size_t i = 0; same && i < fixed.size(); ++i) same = out.palette[i] == fixed[i] || (out.palette[i][3] == 0 && fixed[i][3] == 0);
+    if (!same) throw std::runtime_error("libimagequant: the fixed palette was not kept");
+    out.palette = fixed;
+  }
   return out;
 }
 

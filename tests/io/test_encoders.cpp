@@ -200,6 +200,29 @@ TEST_CASE("PNG palette: a paletted input's own palette, no other colour, undithe
   // No dithering noise: fewer bytes than a new palette for the same texels.
   INFO("input's palette " << written.size() << " bytes, a new palette " << anew.size());
   CHECK(written.size() < anew.size());
+
+  // A fully transparent entry keeps its colour (libimagequant gives alpha-0 entries back as
+  // black), and a one-entry palette (which libimagequant cannot make) is that entry alone.
+  for (const bool one : {false, true}) {
+    const std::string what = one ? "one entry" : "a transparent entry";
+    INFO(what);
+    Image p;
+    p.width = 8, p.height = 4, p.channels = 4;
+    for (uint32_t k = 0; k < p.width * p.height; ++k)
+      for (float v : (one || k % 2 == 0) ? std::array<float, 4>{1, 1, 1, 0} : std::array<float, 4>{0.2f, 0.4f, 0.6f, 1})
+        p.pixels.push_back(v);
+    io::EncodeSettings ps = fresh;  // as read from such an input (a new palette would not keep alpha 0's white)
+    ps.palette_colours = {{255, 255, 255, 0}};
+    if (!one) ps.palette_colours.push_back({51, 102, 153, 255});
+    Image mixed = p;  // a blend between the two, and the transparent white
+    mixed.at(1, 0, 0) = 0.9f, mixed.at(1, 0, 3) = 0.1f;
+    const Image b = io::decode_image(io::encode_image(mixed, ps), "again");
+    REQUIRE(b.channels == 4);
+    CHECK(b.at(0, 0, 0) == 1.0f);  // white, not black
+    CHECK(b.at(0, 0, 3) == 0.0f);
+    CHECK(b.at(1, 0, 0) == 1.0f);  // the nearer entry: transparent white
+    if (!one) CHECK(std::lround(b.at(3, 0, 2) * 255) == std::lround(0.6f * 255));
+  }
 }
 
 TEST_CASE("PNG image data deflated tighter than zlib's strongest level, the same filtered rows", "[io][encode]") {
@@ -315,7 +338,7 @@ TEST_CASE("PNG opaque alpha: an alpha channel whose every texel is opaque is not
   }
 }
 
-TEST_CASE("PNG at the strongest zlib level and the best filter: no larger than OpenImageIO's default writer", "[io][encode]") {
+TEST_CASE("PNG at the best filter, deflated by libdeflate: no larger than OpenImageIO's default writer", "[io][encode]") {
   const Image img = smooth_image(128, 128, 3);
   const auto ours = io::encode_image(img, "png"), theirs = oiio_write(img, "memory.png", "");
   CHECK(ours.size() <= theirs.size());
