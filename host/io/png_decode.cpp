@@ -9,6 +9,7 @@
 #include <csetjmp>
 #include <cstdio>
 #include <cstring>
+#include <new>
 #include <string>
 #include <vector>
 
@@ -96,9 +97,21 @@ bool read_png_palette_chunks(png_structp png, png_infop info, std::vector<std::a
   return true;
 }
 
+// A libpng reader over `src` (which outlives it).
 struct PngReadStruct {
   png_structp png = nullptr;
   png_infop info = nullptr;
+  explicit PngReadStruct(PngSource* src) {
+    png = png_create_read_struct(PNG_LIBPNG_VER_STRING, src, on_png_read_error, on_png_read_warning);
+    if (png) info = png_create_info_struct(png);
+    if (!png || !info) {
+      png_destroy_read_struct(&png, info ? &info : nullptr, nullptr);
+      throw std::bad_alloc();
+    }
+    png_set_read_fn(png, src, read_png_bytes);
+  }
+  PngReadStruct(const PngReadStruct&) = delete;
+  PngReadStruct& operator=(const PngReadStruct&) = delete;
   ~PngReadStruct() { png_destroy_read_struct(&png, info ? &info : nullptr, nullptr); }
 };
 
@@ -116,11 +129,7 @@ Image decode_png(const uint8_t* bytes, size_t size, bool header_only, uint32_t m
   }
   PngSource src;
   src.data = bytes, src.size = size;
-  PngReadStruct rs;
-  rs.png = png_create_read_struct(PNG_LIBPNG_VER_STRING, &src, on_png_read_error, on_png_read_warning);
-  if (rs.png) rs.info = png_create_info_struct(rs.png);
-  if (!rs.png || !rs.info) throw std::bad_alloc();
-  png_set_read_fn(rs.png, &src, read_png_bytes);
+  PngReadStruct rs(&src);
 
   PngLayout layout;
   if (!read_png_layout(rs.png, rs.info, &layout)) throw DecodeError(src.error);
@@ -153,11 +162,7 @@ Image decode_png(const uint8_t* bytes, size_t size, bool header_only, uint32_t m
 std::vector<std::array<uint8_t, 4>> read_png_palette(const uint8_t* bytes, size_t size) {
   PngSource src;
   src.data = bytes, src.size = size;
-  PngReadStruct rs;
-  rs.png = png_create_read_struct(PNG_LIBPNG_VER_STRING, &src, on_png_read_error, on_png_read_warning);
-  if (rs.png) rs.info = png_create_info_struct(rs.png);
-  if (!rs.png || !rs.info) throw std::bad_alloc();
-  png_set_read_fn(rs.png, &src, read_png_bytes);
+  PngReadStruct rs(&src);
   std::vector<std::array<uint8_t, 4>> palette;
   if (!read_png_palette_chunks(rs.png, rs.info, &palette)) palette.clear();
   return palette;
