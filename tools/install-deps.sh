@@ -3,7 +3,8 @@
 # Debian packages through apt-get (gnuplot-nox draws eval's plot; chromium lets the eval
 # HTML test load the report headless; slurmctld, slurmd and munge run the batch test's
 # one-node cluster on loopback; clang and libclang-rt-14-dev build the libFuzzer targets;
-# libdeflate-dev deflates PNG rows tighter than zlib; libastcenc-dev is the ASTC codec of --texture-format astc and eval --codec, and the
+# libdeflate-dev deflates PNG rows tighter than zlib (zlib1g-dev inflates them);
+# libastcenc-dev is the ASTC codec of --texture-format astc and eval --codec, and the
 # astcenc command decodes the KTX2 files in the tests), and, from npm into
 # tools/node_modules (project-local, never global, exact versions in tools/package.json):
 # the Khronos glTF validator, three.js (tests/client renders inputs and outputs with its
@@ -18,7 +19,7 @@ packages=(
   libvulkan-dev mesa-vulkan-drivers vulkan-validationlayers vulkan-tools glslang-tools spirv-tools
   libeigen3-dev libsuitesparse-dev libopenblas-dev
   libtinygltf-dev nlohmann-json3-dev libstb-dev
-  libopenimageio-dev openimageio-tools libpng-dev libjpeg62-turbo-dev libimagequant-dev libdeflate-dev
+  libopenimageio-dev openimageio-tools libpng-dev zlib1g-dev libjpeg62-turbo-dev libimagequant-dev libdeflate-dev
   libastcenc-dev astcenc
   catch2 libcli11-dev libnlopt-cxx-dev
   gnuplot-nox chromium
