@@ -59,7 +59,8 @@ std::string describe_encoded(const std::vector<uint8_t>& bytes);
 
 // PNG: 8 or 16 bit as image.bits says, the smallest of a few row filter choices deflated by
 // libdeflate at its strongest, no alpha channel when every texel is opaque, in a palette when
-// settings.palette (the input's own where settings.palette_colours holds it; io/png_encode.h). JPEG: libjpeg at the settings (io/jpeg_encode.h).
+// settings.palette (the input's own where settings.palette_colours holds it; io/png_encode.h).
+// JPEG: libjpeg at the settings (io/jpeg_encode.h).
 std::vector<uint8_t> encode_image(const Image& image, const EncodeSettings& settings);
 // The same with default settings for `format` ("png": not paletted; "jpeg": quality 95, 4:2:0).
 std::vector<uint8_t> encode_image(const Image& image, const std::string& format);
