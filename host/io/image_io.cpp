@@ -129,7 +129,11 @@ EncodeSettings encode_settings_of(const std::vector<uint8_t>& bytes) {
 }
 
 std::string describe(const EncodeSettings& s) {
-  if (s.format == "png") return s.palette ? "png (8-bit palette)" : s.palette_when_faithful ? "png (8-bit palette where faithful)" : "png";
+  if (s.format == "png") {
+    if (s.palette && !s.palette_colours.empty())
+      return "png (8-bit palette: the input's " + std::to_string(s.palette_colours.size()) + " colours)";
+    return s.palette ? "png (8-bit palette)" : s.palette_when_faithful ? "png (8-bit palette where faithful)" : "png";
+  }
   const char* sub = s.jpeg_h_sampling == 2 && s.jpeg_v_sampling == 2   ? "4:2:0"
                     : s.jpeg_h_sampling == 2 && s.jpeg_v_sampling == 1 ? "4:2:2"
                     : s.jpeg_h_sampling == 1 && s.jpeg_v_sampling == 1 ? "4:4:4"
@@ -139,7 +143,8 @@ std::string describe(const EncodeSettings& s) {
 
 std::string describe_encoded(const std::vector<uint8_t>& bytes) {
   EncodeSettings s = encode_settings_of(bytes);
-  s.palette_when_faithful = false;  // a choice for re-encoding, not a property of these bytes
+  s.palette_when_faithful = false;  // choices for re-encoding, not properties of these bytes
+  s.palette_colours.clear();
   return describe(s);
 }
 

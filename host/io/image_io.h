@@ -52,7 +52,8 @@ struct EncodeSettings {
 // The settings that reproduce `bytes`' encoding: PNG (paletted or not) or JPEG (quality
 // from its quantization tables, subsampling, progressive). Anything else: plain PNG.
 EncodeSettings encode_settings_of(const std::vector<uint8_t>& bytes);
-// In words, for reports: "png (8-bit palette)", "jpeg (quality 87, 4:2:0, progressive)".
+// In words, for reports: "png (8-bit palette: the input's 54 colours)", "jpeg (quality 87,
+// 4:2:0, progressive)".
 std::string describe(const EncodeSettings& settings);
 // What `bytes` are, in the same words: "png (8-bit palette)", "png", "jpeg (quality 87, 4:2:0)".
 std::string describe_encoded(const std::vector<uint8_t>& bytes);

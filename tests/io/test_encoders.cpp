@@ -155,6 +155,8 @@ TEST_CASE("PNG palette: a paletted input's own palette, no other colour, undithe
   const io::EncodeSettings settings = io::encode_settings_of(input);
   CHECK(settings.palette);
   REQUIRE(settings.palette_colours.size() == 6);
+  CHECK(io::describe(settings) == "png (8-bit palette: the input's 6 colours)");
+  CHECK(io::describe_encoded(input) == "png (8-bit palette)");  // a property of the bytes, not a choice
   std::set<std::array<uint8_t, 4>> entries(settings.palette_colours.begin(), settings.palette_colours.end());
   for (const auto& b : bands) {
     const std::array<uint8_t, 4> e{uint8_t(std::lround(b[0] * 255)), uint8_t(std::lround(b[1] * 255)),
