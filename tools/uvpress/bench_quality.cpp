@@ -83,6 +83,13 @@ void add_bench_quality(CLI::App& bench, Globals& g) {
         line["cost_ratio"] = r.cost_ratio;
         line["q_reparam"] = r.guard.ran ? nlohmann::ordered_json(r.guard.q_reparam) : nlohmann::ordered_json(nullptr);
         line["q_resize"] = r.guard.ran ? nlohmann::ordered_json(r.guard.q_resize) : nlohmann::ordered_json(nullptr);
+        // What the written textures cost in bytes beside what they look like: new / old, and
+        // new / the input resized to the same texels and encoded alike (issue 18's two ratios).
+        const auto& tt = r.texture_totals;
+        if (tt.old_bytes > 0 && tt.resize_bytes > 0)
+          line["texture_bytes"] = {{"old", tt.old_bytes}, {"new", tt.new_bytes}, {"resize", tt.resize_bytes},
+                                   {"ratio", double(tt.new_bytes) / double(tt.old_bytes)},
+                                   {"vs_resize", double(tt.new_bytes) / double(tt.resize_bytes)}};
         // The guard's views from afar (coarse mip levels): reparam's file and the resize.
         if (r.guard.far)
           line["far"] = {{"resolution", r.guard.far->resolution}, {"q_reparam", r.guard.far->q_reparam}, {"q_resize", r.guard.far->q_resize},
