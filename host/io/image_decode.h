@@ -29,6 +29,9 @@ struct ImageTooLarge : DecodeError {
 // as OpenImageIO converts (which differs from v / 255 in the last bit for some v).
 inline float unorm_to_float(uint32_t v, uint32_t largest) { return float(v) * (1.0f / float(largest)); }
 
+// A big-endian 32-bit value, as PNG stores its chunk lengths and IHDR's sides.
+inline uint32_t read_be32(const uint8_t* p) { return uint32_t(p[0]) << 24 | uint32_t(p[1]) << 16 | uint32_t(p[2]) << 8 | p[3]; }
+
 // PNG (io/png_decode.cpp): palettes expand to RGB, tRNS to an alpha channel, 1/2/4-bit
 // grey to 8 bits; 16 bits stay 16; no gamma is applied and alpha stays straight. Fills
 // width, height, channels (1 grey, 2 grey+alpha, 3 RGB, 4 RGBA) and bits (8 or 16), and

@@ -122,10 +122,8 @@ Image decode_png(const uint8_t* bytes, size_t size, bool header_only, uint32_t m
   // how large it claims to be (libpng reads on to the first IDAT before it tells), and
   // libpng's row buffers are never sized for more.
   if (size >= 24 && std::memcmp(bytes + 12, "IHDR", 4) == 0) {
-    auto be32 = [&](size_t at) {
-      return uint32_t(bytes[at]) << 24 | uint32_t(bytes[at + 1]) << 16 | uint32_t(bytes[at + 2]) << 8 | bytes[at + 3];
-    };
-    if (be32(16) > max_side || be32(20) > max_side) throw ImageTooLarge(be32(16), be32(20), max_side);
+    const uint32_t w = read_be32(bytes + 16), h = read_be32(bytes + 20);
+    if (w > max_side || h > max_side) throw ImageTooLarge(w, h, max_side);
   }
   PngSource src;
   src.data = bytes, src.size = size;

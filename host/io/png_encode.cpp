@@ -1,5 +1,6 @@
 #include "io/png_encode.h"
 
+#include "io/image_decode.h"
 #include "io/palette_quantize.h"
 
 #include <libdeflate.h>
@@ -94,12 +95,7 @@ Rows palette_rows(const Image& img, bool keep_alpha, float dithering, const std:
     for (int c = 0; c < 3; ++c) rgba[4 * i + size_t(c)] = to8(grey ? p[0] : p[c]);
     rgba[4 * i + 3] = keep_alpha ? to8(p[img.channels - 1]) : 255;
   }
-  // The fixed palette's entries that can match: an opaque image takes only opaque ones (a
-  // translucent entry would add transparency that was not there).
-  std::vector<std::array<uint8_t, 4>> allowed;
-  for (const auto& e : fixed)
-    if (keep_alpha || e[3] == 255) allowed.push_back(e);
-  PaletteImage q = quantize_palette(rgba.data(), img.width, img.height, allowed.empty() ? dithering : 0.0f, allowed);
+  PaletteImage q = quantize_palette(rgba.data(), img.width, img.height, fixed.empty() ? dithering : 0.0f, fixed);
   // Translucent entries first, so that tRNS lists only them.
   std::vector<uint8_t> order(q.palette.size());
   for (size_t i = 0; i < order.size(); ++i) order[i] = uint8_t(i);
@@ -155,7 +151,6 @@ Rows direct_rows(const Image& img, bool keep_alpha) {
   return r;
 }
 
-uint32_t be32(const uint8_t* p) { return uint32_t(p[0]) << 24 | uint32_t(p[1]) << 16 | uint32_t(p[2]) << 8 | p[3]; }
 void put_be32(std::vector<uint8_t>& out, uint32_t v) {
   for (int s = 24; s >= 0; s -= 8) out.push_back(uint8_t(v >> s));
 }
@@ -174,7 +169,7 @@ bool recompress_image_data(std::vector<uint8_t>& png) {
   size_t first = 0, last = 0;
   std::vector<uint8_t> stream;
   for (size_t at = 8; at + 12 <= png.size();) {
-    const size_t n = be32(&png[at]);
+    const size_t n = read_be32(&png[at]);
     if (at + 12 + n > png.size()) return false;
     if (std::memcmp(&png[at + 4], "IDAT", 4) == 0) {
       if (!first) first = at;
@@ -185,7 +180,7 @@ bool recompress_image_data(std::vector<uint8_t>& png) {
   }
   if (!first || stream.empty() || png.size() < 33 || png[28] != PNG_INTERLACE_NONE) return false;
   // The filtered rows' size, from IHDR: a filter byte and ceil(width * bits a texel / 8).
-  const uint32_t width = be32(&png[16]), height = be32(&png[20]);
+  const uint32_t width = read_be32(&png[16]), height = read_be32(&png[20]);
   const int depth = png[24], colour = png[25];
   const int channels = colour == PNG_COLOR_TYPE_RGB ? 3 : colour == PNG_COLOR_TYPE_RGBA ? 4 : colour == PNG_COLOR_TYPE_GRAY_ALPHA ? 2 : 1;
   std::vector<uint8_t> rows(size_t(height) * (1 + (size_t(width) * size_t(channels * depth) + 7) / 8));
@@ -221,14 +216,15 @@ std::vector<uint8_t> encode_png(const Image& image, const PngOptions& options) {
     throw std::invalid_argument("encode_png: inconsistent image");
   const bool keep_alpha = !opaque(image);
   const bool palette = (options.palette || options.palette_when_faithful) && image.bits != 16;
-  // The input's palette where it can hold the image: a translucent image needs a translucent
-  // entry, an opaque one an opaque entry (else a new palette).
+  // The input's palette where it can hold the image: an opaque image takes its opaque entries
+  // only (a translucent one would add transparency that was not there), a translucent image
+  // all of them if any is translucent; otherwise a new palette.
   std::vector<std::array<uint8_t, 4>> fixed;
   if (options.palette) {
-    const auto& f = options.fixed_palette;
-    const bool translucent = std::any_of(f.begin(), f.end(), [](const std::array<uint8_t, 4>& e) { return e[3] < 255; });
-    const bool opaque_entry = std::any_of(f.begin(), f.end(), [](const std::array<uint8_t, 4>& e) { return e[3] == 255; });
-    if (keep_alpha ? translucent : opaque_entry) fixed = f;
+    for (const auto& e : options.fixed_palette)
+      if (keep_alpha || e[3] == 255) fixed.push_back(e);
+    if (keep_alpha && std::none_of(fixed.begin(), fixed.end(), [](const std::array<uint8_t, 4>& e) { return e[3] < 255; }))
+      fixed.clear();
   }
   Rows rows = palette ? palette_rows(image, keep_alpha, options.palette ? options.dithering : 0.0f, fixed) : direct_rows(image, keep_alpha);
   if (!options.palette && palette && rows.rms > kFaithfulPaletteRms) rows = direct_rows(image, keep_alpha);
