@@ -214,6 +214,83 @@ void fill_gutter(Image& image, const std::vector<uint8_t>& covered, bool srgb, u
   }
 }
 
+void coarsen_gutter(Image& image, const std::vector<uint8_t>& footprint, bool srgb, bool wrap_x, bool wrap_y,
+                    uint32_t max_block) {
+  const int W = int(image.width), H = int(image.height), C = int(image.channels);
+  const size_t N = size_t(W) * H;
+  if (footprint.size() != N || C == 0 || N == 0) return;
+  // The coarsest block: at most max_block, and dividing both sides.
+  int levels = 0;
+  while ((2u << levels) <= max_block && W % (2 << levels) == 0 && H % (2 << levels) == 0) ++levels;
+  if (levels == 0) return;
+  const int colour = srgb ? (C == 2 || C == 4 ? C - 1 : C) : 0;
+
+  // Chebyshev distance to the footprint: a breadth-first search over 8-neighbours from every
+  // footprint texel at once (exact for this metric), wrapping across the edges asked for.
+  constexpr uint32_t kFar = UINT32_MAX;
+  std::vector<uint32_t> d(N, kFar);
+  std::vector<uint32_t> queue;
+  queue.reserve(N);
+  for (size_t i = 0; i < N; ++i)
+    if (footprint[i]) d[i] = 0, queue.push_back(uint32_t(i));
+  if (queue.empty()) return;
+  for (size_t head = 0; head < queue.size(); ++head) {
+    const uint32_t i = queue[head];
+    const int x = int(i % uint32_t(W)), y = int(i / uint32_t(W));
+    for (int dy = -1; dy <= 1; ++dy)
+      for (int dx = -1; dx <= 1; ++dx) {
+        int u = x + dx, v = y + dy;
+        if (u < 0 || u >= W) {
+          if (!wrap_x) continue;
+          u = (u + W) % W;
+        }
+        if (v < 0 || v >= H) {
+          if (!wrap_y) continue;
+          v = (v + H) % H;
+        }
+        const size_t k = size_t(v) * W + u;
+        if (d[k] == kFar) d[k] = d[i] + 1, queue.push_back(uint32_t(k));
+      }
+  }
+
+  // Per texel its level j (0: kept), then per level and block the sum and the count of the
+  // texels that take that block's mean.
+  std::vector<uint8_t> level(N, 0);
+  for (size_t i = 0; i < N; ++i) {
+    int j = 0;
+    while (j < levels && (2u << j) <= d[i]) ++j;
+    level[i] = uint8_t(j);
+  }
+  auto linear = [&](float v, int c) { return c < colour ? double(srgb_decode_fast(v)) : double(v); };
+  std::vector<std::vector<double>> sum(size_t(levels) + 1);
+  std::vector<std::vector<uint32_t>> count(size_t(levels) + 1);
+  for (int j = 1; j <= levels; ++j) {
+    sum[j].assign((N >> (2 * j)) * C, 0.0);
+    count[j].assign(N >> (2 * j), 0);
+  }
+  auto block = [&](int x, int y, int j) { return size_t(y >> j) * size_t(W >> j) + size_t(x >> j); };
+  for (int y = 0; y < H; ++y)
+    for (int x = 0; x < W; ++x) {
+      const size_t i = size_t(y) * W + x;
+      const int j = level[i];
+      if (j == 0) continue;
+      const size_t b = block(x, y, j);
+      ++count[j][b];
+      for (int c = 0; c < C; ++c) sum[j][b * C + c] += linear(image.pixels[i * C + c], c);
+    }
+  for (int y = 0; y < H; ++y)
+    for (int x = 0; x < W; ++x) {
+      const size_t i = size_t(y) * W + x;
+      const int j = level[i];
+      if (j == 0) continue;
+      const size_t b = block(x, y, j);
+      for (int c = 0; c < C; ++c) {
+        const float m = float(sum[j][b * C + c] / count[j][b]);
+        image.pixels[i * C + c] = c < colour ? srgb_encode_fast(m) : m;
+      }
+    }
+}
+
 uint32_t mip_safe_gutter(double image_texels, uint32_t coarsest_side, uint32_t minimum, uint32_t maximum) {
   const double side = std::sqrt(std::max(image_texels, 1.0));
   uint32_t g = 1;

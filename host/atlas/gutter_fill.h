@@ -51,6 +51,28 @@ namespace uvpress::atlas {
 // texel or every texel is covered. Deterministic.
 void fill_gutter(Image& image, const std::vector<uint8_t>& covered, bool srgb = false, uint32_t ring = 1);
 
+// Gutter texels that no mip level reads near a chart, made flat without changing any level
+// that does. A renderer samples a chart at level k bilinearly from a point inside one of its
+// triangles, so it reads level-0 texels less than 1.5 x 2^k texels (Chebyshev distance) from
+// the chart's footprint; a texel d >= 2^j texels away is therefore read near a chart by levels
+// j and coarser alone, and those average it over the aligned 2^j x 2^j block that holds it
+// (a box-filtered chain, glGenerateMipmap's, from sides that are multiples of 2^j). Such a
+// texel (2^j the largest power of two <= d, at most `max_block` and at most the largest power
+// of two that divides both sides) takes the mean of the texels of its block that do likewise:
+// every block's sum at level j and coarser stays what it was, so every level that reads the
+// texel shows the same colour there, and the finer levels, which would see the change, never
+// look there. What the surround and the fill bring to the coarse levels stays; the detail they
+// carry at level 0, which nothing on screen samples, goes, and with it bytes (README, Bytes).
+// An odd side gets nothing: its chain's blocks drift against level 0's (a 717-texel side halves
+// to 358 texels of 2.003), and a flattened block would change what they average.
+// `footprint` (width * height, 1 = a triangle overlaps the texel: RebakeStats::footprint);
+// `srgb` as fill_gutter (means in linear light, alpha as stored); `wrap_x`, `wrap_y`: the
+// sampler repeats across that edge, so distances wrap around (clamping and mirroring read
+// no texel nearer a chart than the edge texel itself). Exact but for 8-bit rounding of the
+// means. Deterministic; nothing happens without a footprint texel.
+void coarsen_gutter(Image& image, const std::vector<uint8_t>& footprint, bool srgb, bool wrap_x = true,
+                    bool wrap_y = true, uint32_t max_block = 64);
+
 // The gutter (texels between charts, atlas/pack.h) that keeps every mip level clean down to
 // the first whose side is at most `coarsest_side` texels, for an image of `image_texels`
 // (W x H; the side taken as sqrt(W H)): with the fill above a level k is clean when the

@@ -359,6 +359,7 @@ Image rebake(const Image& source, const std::vector<RebakeMesh>& meshes, const R
   if (stats) {
     stats->covered = count;
     stats->triangles = tris.size();
+    stats->footprint = covered;
     stats->coverage = std::move(covered);
     stats->sample_seconds = sample_seconds;
   }

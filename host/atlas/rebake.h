@@ -62,6 +62,9 @@ struct RebakeStats {
   size_t covered = 0;            // texels owned by a triangle
   size_t triangles = 0;          // non-degenerate triangles rasterized
   std::vector<uint8_t> coverage; // width * height, 1 = covered (row 0 on top)
+  // width * height, 1 = a triangle overlaps the texel: the charts' footprints alone, without
+  // the surround or texels copied later (what atlas::coarsen_gutter keeps).
+  std::vector<uint8_t> footprint;
   double sample_seconds = 0;     // time in the per-texel sampling (on the engine)
 };
 

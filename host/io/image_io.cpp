@@ -145,6 +145,7 @@ std::string describe_encoded(const std::vector<uint8_t>& bytes) {
   EncodeSettings s = encode_settings_of(bytes);
   s.palette_when_faithful = false;  // choices for re-encoding, not properties of these bytes
   s.palette_colours.clear();
+  s.importance.clear();
   return describe(s);
 }
 
@@ -157,6 +158,7 @@ std::vector<uint8_t> encode_image(const Image& image, const EncodeSettings& sett
     o.palette = settings.palette;
     o.fixed_palette = settings.palette_colours;
     o.palette_when_faithful = settings.palette_when_faithful;
+    o.importance = settings.importance;
     o.draft = settings.draft;
     return encode_png(image, o);
   }

@@ -43,6 +43,9 @@ struct EncodeSettings {
   // colour (PngOptions::fixed_palette); empty: a new palette for the new texels.
   std::vector<std::array<uint8_t, 4>> palette_colours;
   bool palette_when_faithful = false;  // PNG: a palette where it is near-lossless (PngOptions; 8-bit truecolour inputs)
+  // PNG with a new palette: per texel (row-major) how much its colour weighs in the palette's
+  // fit and in the faithful test (PngOptions::importance); empty: all alike.
+  std::vector<uint8_t> importance;
   int jpeg_quality = 95;       // JPEG: IJG quality, estimated from the input's tables
   int jpeg_h_sampling = 2, jpeg_v_sampling = 2;  // JPEG: luma sampling factors (2, 2: 4:2:0)
   bool progressive = false;    // JPEG: progressive when the input was

@@ -19,7 +19,7 @@ struct Free {
 }  // namespace
 
 PaletteImage quantize_palette(const uint8_t* rgba, uint32_t width, uint32_t height, float dithering,
-                              const std::vector<std::array<uint8_t, 4>>& fixed) {
+                              const std::vector<std::array<uint8_t, 4>>& fixed, const std::vector<uint8_t>* importance) {
   if (fixed.size() > 256) throw std::invalid_argument("quantize_palette: more than 256 fixed colours");
   PaletteImage out;
   out.indices.resize(size_t(width) * height);
@@ -37,6 +37,12 @@ PaletteImage quantize_palette(const uint8_t* rgba, uint32_t width, uint32_t heig
   // Gamma 0: libimagequant's default (sRGB-like), which is how colour textures are stored.
   std::unique_ptr<liq_image, Free> image(liq_image_create_rgba(attr.get(), rgba, int(width), int(height), 0));
   if (!image) throw std::runtime_error("libimagequant: cannot take a " + std::to_string(width) + "x" + std::to_string(height) + " image");
+  if (importance && importance->size() == size_t(width) * height) {
+    // libimagequant takes the buffer as non-const; LIQ_COPY_PIXELS copies it.
+    std::vector<uint8_t> weights(*importance);
+    if (liq_image_set_importance_map(image.get(), weights.data(), weights.size(), LIQ_COPY_PIXELS) != LIQ_OK)
+      throw std::runtime_error("libimagequant: cannot set the importance map");
+  }
   for (const auto& c : fixed)
     if (liq_image_add_fixed_color(image.get(), liq_color{c[0], c[1], c[2], c[3]}) != LIQ_OK)
       throw std::runtime_error("libimagequant: cannot reserve a palette colour");

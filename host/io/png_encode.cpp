@@ -85,7 +85,8 @@ bool opaque(const Image& img) {
   return true;
 }
 
-Rows palette_rows(const Image& img, bool keep_alpha, float dithering, const std::vector<std::array<uint8_t, 4>>& fixed) {
+Rows palette_rows(const Image& img, bool keep_alpha, float dithering, const std::vector<std::array<uint8_t, 4>>& fixed,
+                  const std::vector<uint8_t>& importance) {
   const size_t n = size_t(img.width) * img.height;
   std::vector<uint8_t> rgba(n * 4);
   auto to8 = [](float v) { return uint8_t(std::lround(std::clamp(v, 0.0f, 1.0f) * 255.0f)); };
@@ -95,7 +96,9 @@ Rows palette_rows(const Image& img, bool keep_alpha, float dithering, const std:
     for (int c = 0; c < 3; ++c) rgba[4 * i + size_t(c)] = to8(grey ? p[0] : p[c]);
     rgba[4 * i + 3] = keep_alpha ? to8(p[img.channels - 1]) : 255;
   }
-  PaletteImage q = quantize_palette(rgba.data(), img.width, img.height, fixed.empty() ? dithering : 0.0f, fixed);
+  const bool weighted = importance.size() == n;
+  PaletteImage q = quantize_palette(rgba.data(), img.width, img.height, fixed.empty() ? dithering : 0.0f, fixed,
+                                    weighted ? &importance : nullptr);
   // Translucent entries first, so that tRNS lists only them.
   std::vector<uint8_t> order(q.palette.size());
   for (size_t i = 0; i < order.size(); ++i) order[i] = uint8_t(i);
@@ -114,15 +117,19 @@ Rows palette_rows(const Image& img, bool keep_alpha, float dithering, const std:
   r.bytes_per_row = img.width;  // one index a byte; png_set_packing packs lower depths
   r.data.resize(n);
   for (size_t i = 0; i < n; ++i) r.data[i] = slot[q.indices[i]];
-  // Over the samples written (grey images compare their one channel, opaque ones no alpha).
+  // Over the samples written (grey images compare their one channel, opaque ones no alpha),
+  // each texel weighted by its importance where given.
   const int count = img.channels <= 2 ? 1 : 3;
-  double sum = 0;
+  double sum = 0, weight = 0;
   for (size_t i = 0; i < n; ++i) {
     const auto& e = q.palette[q.indices[i]];
-    for (int c = 0; c < count; ++c) sum += (double(e[size_t(c)]) - rgba[4 * i + size_t(c)]) * (double(e[size_t(c)]) - rgba[4 * i + size_t(c)]);
-    if (keep_alpha) sum += (double(e[3]) - rgba[4 * i + 3]) * (double(e[3]) - rgba[4 * i + 3]);
+    double s = 0;
+    for (int c = 0; c < count; ++c) s += (double(e[size_t(c)]) - rgba[4 * i + size_t(c)]) * (double(e[size_t(c)]) - rgba[4 * i + size_t(c)]);
+    if (keep_alpha) s += (double(e[3]) - rgba[4 * i + 3]) * (double(e[3]) - rgba[4 * i + 3]);
+    const double w = weighted ? std::max(1.0, double(importance[i])) : 1.0;
+    sum += w * s, weight += w;
   }
-  r.rms = std::sqrt(sum / (double(n) * (count + (keep_alpha ? 1 : 0))));
+  r.rms = std::sqrt(sum / (weight * (count + (keep_alpha ? 1 : 0))));
   return r;
 }
 
@@ -226,7 +233,8 @@ std::vector<uint8_t> encode_png(const Image& image, const PngOptions& options) {
     if (keep_alpha && std::none_of(fixed.begin(), fixed.end(), [](const std::array<uint8_t, 4>& e) { return e[3] < 255; }))
       fixed.clear();
   }
-  Rows rows = palette ? palette_rows(image, keep_alpha, options.palette ? options.dithering : 0.0f, fixed) : direct_rows(image, keep_alpha);
+  Rows rows = palette ? palette_rows(image, keep_alpha, options.palette ? options.dithering : 0.0f, fixed, options.importance)
+                      : direct_rows(image, keep_alpha);
   if (!options.palette && palette && rows.rms > kFaithfulPaletteRms) rows = direct_rows(image, keep_alpha);
   // libpng's adaptive choice per row (minimum sum of absolute differences) is a heuristic:
   // on smooth colour it wins, on palettes and flat areas no filter often does. Try both,

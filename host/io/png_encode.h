@@ -32,6 +32,14 @@ struct PngOptions {
   // MultiUVTest's: lossless), smooth colour does not (the demo's: 1.7 levels, q 0.0176 ->
   // 0.0189). For truecolour 8-bit inputs (EncodeSettings).
   bool palette_when_faithful = false;
+  // A new palette's weights: per texel (width * height, row-major) how much its colour counts
+  // in the palette's fit (libimagequant's importance map, 0-255) and in the faithful test's
+  // RMS; empty, or not width * height: all alike. reparam gives the texels a chart's bilinear
+  // taps read full weight and the gutter, which coarse mip levels alone see (and average),
+  // little: with coarsen_gutter's flat blocks (atlas/gutter_fill.h) Fox's gutters bring
+  // colours of their own, and fitted alike they took entries from the charts (q 0.00165 ->
+  // 0.00171; weighted 1 in 16, 0.00167).
+  std::vector<uint8_t> importance;
   // One fast pass (zlib's fastest level, no row filter, no libdeflate) instead of the
   // strongest of three:
   // the same texels in larger bytes, for files that are decoded and scored but not written

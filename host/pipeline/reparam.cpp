@@ -1,6 +1,7 @@
 #include "pipeline/reparam.h"
 
 #include "atlas/charts.h"
+#include "atlas/gutter_fill.h"
 #include "atlas/pack.h"
 #include "atlas/place_texels.h"
 #include "atlas/rebake.h"
@@ -405,9 +406,14 @@ struct Realized {
   size_t pinned_units = 0;           // units packed at the source's density (Candidate::pin_copies)
   double t_mesh = 0, t_pack = 0, t_bake = 0;
   double q = -1;                     // 20-view GMSD of the file as written (-1: not scored)
-  // Images encoded as drafts (io::EncodeSettings::draft), with their texels: encoded for
-  // good (finish_encoding) only if this candidate is kept.
-  std::vector<std::pair<int, Image>> drafts;
+  // Images encoded as drafts (io::EncodeSettings::draft), with their texels and settings:
+  // encoded for good (finish_encoding) only if this candidate is kept.
+  struct Draft {
+    int image = 0;
+    Image texels;
+    io::EncodeSettings settings;
+  };
+  std::vector<Draft> drafts;
 };
 
 perceptual::TriangleTarget target_of(const perceptual::TriangleResult& r, double floor, bool rotate) {
@@ -478,13 +484,17 @@ atlas::BudgetOptions budget_options(const ReparamOptions& o, const Candidate& ca
                        : cand.wide_gutter                      ? atlas::mip_safe_gutter(budget_texels, 32, 4, 32)
                                                                : atlas::mip_safe_gutter(budget_texels);
   budget.pack.block = o.block;
-  if (cand.mip_aligned) {
-    // At least four of them a side: a tiny budget under a wide gutter would otherwise round
-    // a side up past the budget (SizeRule::dims floors the shorter side at one multiple).
-    uint32_t m = cand.mip_depth * atlas::mip_phase_align(budget.pack.gutter, budget.pack.block);
-    while (m > 1 && 4.0 * m > std::sqrt(budget_texels) && (m / 2) % std::max(1u, o.block) == 0) m /= 2;
-    budget.side_multiple = m;
-  }
+  // Sides multiples of the gutter's power of two (mip-aligned candidates: of a multiple of
+  // it), so that each mip level the gutter keeps clean is exact 2 x 2 boxes of the one above:
+  // an odd side halves to texels of 2.003 that drift against level 0 (Fox's 717 x 717), and
+  // the gutter's fill and coarsen_gutter's flat blocks then no longer average as planned.
+  // At least four of them a side: a tiny budget under a wide gutter would otherwise round a
+  // side up past the budget (SizeRule::dims floors the shorter side at one multiple). Not
+  // under --size, whose side is the user's.
+  if (o.size > 0 && !cand.mip_aligned) return budget;
+  uint32_t m = (cand.mip_aligned ? cand.mip_depth : 1) * atlas::mip_phase_align(budget.pack.gutter, budget.pack.block);
+  while (m > 1 && 4.0 * m > std::sqrt(budget_texels) && (m / 2) % std::max(1u, o.block) == 0) m /= 2;
+  budget.side_multiple = m;
   return budget;
 }
 
@@ -552,6 +562,21 @@ bool unit_scales_differ(const Prepared& P, double c) {
   const perceptual::RateAllocation a = perceptual::allocate_by_equal_slope(P.unit_loss, P.unit_area, P.unit_weight, c);
   const double top = *std::max_element(a.scale.begin(), a.scale.end());
   return *std::min_element(a.scale.begin(), a.scale.end()) < 0.99 * top;
+}
+
+// A new palette's weights (io::EncodeSettings::importance): full for the texels that a
+// chart's bilinear taps read at level 0 (its footprint and the ring around it), a sixteenth
+// for the gutter, which only coarse mip levels see, averaged (atlas::coarsen_gutter).
+std::vector<uint8_t> palette_importance(const std::vector<uint8_t>& footprint, uint32_t width, uint32_t height) {
+  std::vector<uint8_t> weight(size_t(width) * height, 16);
+  if (footprint.size() != weight.size()) return {};
+  for (uint32_t y = 0; y < height; ++y)
+    for (uint32_t x = 0; x < width; ++x) {
+      if (!footprint[size_t(y) * width + x]) continue;
+      for (uint32_t v = y > 0 ? y - 1 : 0; v <= std::min(y + 1, height - 1); ++v)
+        for (uint32_t u = x > 0 ? x - 1 : 0; u <= std::min(x + 1, width - 1); ++u) weight[size_t(v) * width + u] = 255;
+    }
+  return weight;
 }
 
 // Builds one candidate into `file` (a copy of the input): mesh stage per chart, packing
@@ -928,6 +953,14 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
       // encoding was 4-7 % of a run (Fox, the truck) spent on bytes nobody kept.
       io::EncodeSettings settings = io::encode_settings_of(old_bytes);
       settings.draft = settings.format == "png";
+      // The gutter's detail that no mip level reads near a chart, flattened: bytes, not what
+      // is seen. Not into the input's own palette, where each flat block's mean would take
+      // the nearest entry, and the coarse levels another colour (Duck: q 0.000292 -> 0.000298
+      // for 1 % of its bytes).
+      if (!(settings.palette && !settings.palette_colours.empty()))
+        atlas::coarsen_gutter(baked, coverage.footprint, ro.role == atlas::RebakeRole::Color, ro.wrap_s == atlas::kWrapRepeat,
+                              ro.wrap_t == atlas::kWrapRepeat);
+      if (settings.palette_when_faithful) settings.importance = palette_importance(coverage.footprint, baked.width, baked.height);
       file.image_bytes[size_t(i)] = io::encode_image(baked, settings);
       out.old_texels += double(source.width) * source.height;
       out.new_texels += double(baked.width) * baked.height;
@@ -939,7 +972,7 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
       t.new_size = {baked.width, baked.height};
       t.old_bytes = old_bytes.size();
       t.new_bytes = file.image_bytes[size_t(i)].size();  // a draft's; count_texture_costs counts what is written
-      if (settings.draft) out.drafts.emplace_back(i, std::move(baked));
+      if (settings.draft) out.drafts.push_back({i, std::move(baked), std::move(settings)});
       if (progress) progress(bake_stage, ++baked_count, L.images.size());
     }
     out.t_bake += t0.seconds();
@@ -1544,8 +1577,10 @@ void choose_layout(Run& run, const std::vector<Candidate>& plans) {
 // The kept candidate's drafted images encoded for good, as the input was (the same texels:
 // what was scored is what is written).
 void finish_encoding(Run& run) {
-  for (auto& [i, image] : run.chosen.drafts)
-    run.file.image_bytes[size_t(i)] = io::encode_image(image, io::encode_settings_of(run.original.image_bytes[size_t(i)]));
+  for (auto& d : run.chosen.drafts) {
+    d.settings.draft = false;
+    run.file.image_bytes[size_t(d.image)] = io::encode_image(d.texels, d.settings);
+  }
   run.chosen.drafts.clear();
 }
 

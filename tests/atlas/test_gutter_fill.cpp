@@ -2,8 +2,10 @@
 
 #include "atlas/gutter_fill.h"
 #include "atlas/rebake.h"
+#include "io/image_io.h"
 #include "support.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <vector>
@@ -142,4 +144,126 @@ TEST_CASE("gutter fill: the mip-safe gutter grows with the image's side", "[atla
   CHECK(atlas::mip_safe_gutter(2048.0 * 2048) == 16);   // the cap
   CHECK(atlas::mip_safe_gutter(2048.0 * 2048, 64, 4, 64) == 32);
   CHECK(atlas::mip_safe_gutter(16384.0 * 16384, 64, 4, 64) == 64);
+}
+
+namespace {
+
+// A 128 x 128 sRGB image whose charts hold a smooth gradient and whose gutter holds noise
+// (8-bit values, as a decoded texture): a disc in the middle and a bar along the right edge,
+// which a sampler that repeats reads across to the left edge.
+struct NoisyAtlas {
+  Image image;
+  std::vector<uint8_t> footprint;
+};
+NoisyAtlas noisy_atlas(uint32_t W, uint32_t H) {
+  NoisyAtlas a;
+  a.image.width = W, a.image.height = H, a.image.channels = 3;
+  a.image.pixels.resize(size_t(W) * H * 3);
+  a.footprint.assign(size_t(W) * H, 0);
+  uint32_t state = 12345;
+  for (uint32_t y = 0; y < H; ++y)
+    for (uint32_t x = 0; x < W; ++x) {
+      const double dx = x + 0.5 - 44.0, dy = y + 0.5 - 52.0;
+      const bool chart = dx * dx + dy * dy <= 20.0 * 20.0 || (x >= W - 6 && y >= 60 && y < 84);
+      a.footprint[size_t(y) * W + x] = chart;
+      for (uint32_t c = 0; c < 3; ++c) {
+        state = state * 1664525u + 1013904223u;
+        const uint32_t v = chart ? (x + 2 * y + 40 * c) % 256 : state >> 24;
+        a.image.at(x, y, c) = float(v) / 255.0f;
+      }
+    }
+  return a;
+}
+
+void round_to_8_bits(Image& img) {
+  for (float& v : img.pixels) v = std::round(v * 255.0f) / 255.0f;
+}
+
+}  // namespace
+
+TEST_CASE("coarsen gutter: every mip level reads near a chart what it read before, and the gutter's detail is gone",
+          "[atlas][issue18]") {
+  const uint32_t W = 128, H = 128;
+  const NoisyAtlas a = noisy_atlas(W, H);
+  Image flat = a.image;
+  atlas::coarsen_gutter(flat, a.footprint, true, /*wrap_x=*/true, /*wrap_y=*/false, 64);
+  round_to_8_bits(flat);  // as written
+
+  // Chebyshev distance to the footprint, by brute force (x wrapping, y not).
+  std::vector<int> d(size_t(W) * H, 1 << 20);
+  for (uint32_t fy = 0; fy < H; ++fy)
+    for (uint32_t fx = 0; fx < W; ++fx) {
+      if (!a.footprint[size_t(fy) * W + fx]) continue;
+      for (uint32_t y = 0; y < H; ++y)
+        for (uint32_t x = 0; x < W; ++x) {
+          const int ax = std::abs(int(x) - int(fx)), ddx = std::min(ax, int(W) - ax);
+          int& t = d[size_t(y) * W + x];
+          t = std::min(t, std::max(ddx, std::abs(int(y) - int(fy))));
+        }
+    }
+  // Level 0: the footprint and its ring (bilinear taps) exactly as they were; farther out
+  // the gutter is flat.
+  size_t kept_changed = 0, gutter = 0, gutter_changed = 0;
+  for (size_t i = 0; i < d.size(); ++i)
+    for (uint32_t c = 0; c < 3; ++c) {
+      const bool same = flat.pixels[i * 3 + c] == a.image.pixels[i * 3 + c];
+      if (d[i] <= 1) kept_changed += !same;
+      if (d[i] >= 2) gutter += 1, gutter_changed += !same;
+    }
+  CHECK(kept_changed == 0);
+  CHECK(gutter_changed > gutter / 2);  // noise made flat (a texel that matched its mean by chance stays)
+  // Levels 1..7 (the chain a viewer builds, tests' own box filter): every texel that a
+  // bilinear tap from inside a chart can read (the level-k texel under a footprint texel and
+  // its neighbours, wrapping in x) holds what it held, to 8-bit rounding. A block shifted
+  // by one texel, or a texel flattened one level too coarse, moves these by ~0.1.
+  for (int k = 1; k <= 7; ++k) {
+    const auto before = mip_level(a.image, k), after = mip_level(flat, k);
+    const int w = int(W) >> k, h = int(H) >> k;
+    double worst = 0;
+    for (uint32_t y = 0; y < H; ++y)
+      for (uint32_t x = 0; x < W; ++x) {
+        if (!a.footprint[size_t(y) * W + x]) continue;
+        for (int v = int(y >> k) - 1; v <= int(y >> k) + 1; ++v)
+          for (int u = int(x >> k) - 1; u <= int(x >> k) + 1; ++u) {
+            if (v < 0 || v >= h) continue;
+            const size_t t = (size_t(v) * w + size_t((u + w) % w)) * 3;
+            for (int c = 0; c < 3; ++c) worst = std::max(worst, double(std::abs(after[t + c] - before[t + c])));
+          }
+      }
+    INFO("level " << k);
+    CHECK(worst < 0.006);
+  }
+  // Without the wrap, the bar's neighbours across the left edge are gutter like any other.
+  Image clamped = a.image;
+  atlas::coarsen_gutter(clamped, a.footprint, true, false, false, 64);
+  CHECK(clamped.at(0, 70, 0) != a.image.at(0, 70, 0));
+  CHECK(flat.at(0, 70, 0) == a.image.at(0, 70, 0));
+  // What it is for: the noise gone, the file shrinks.
+  const size_t bytes_before = io::encode_image(a.image, "png").size(), bytes_after = io::encode_image(flat, "png").size();
+  INFO(bytes_before << " -> " << bytes_after);
+  CHECK(bytes_after < bytes_before / 2);
+}
+
+TEST_CASE("coarsen gutter: blocks only as coarse as both sides divide", "[atlas][issue18]") {
+  // An odd side: its chain's blocks drift against level 0, so nothing is flattened.
+  NoisyAtlas odd = noisy_atlas(129, 128);
+  Image img = odd.image;
+  atlas::coarsen_gutter(img, odd.footprint, true);
+  CHECK(img.pixels == odd.image.pixels);
+  // 130 = 2 x 65: 2 x 2 blocks and no coarser. A texel 10 away from any chart takes its
+  // 2 x 2 block's mean (of the block's texels as far out), not an 8 x 8 block's.
+  NoisyAtlas even = noisy_atlas(130, 128);
+  img = even.image;
+  atlas::coarsen_gutter(img, even.footprint, false, false, false);
+  const uint32_t x = 100, y = 10;  // far from the disc and the bar
+  double mean = 0;
+  for (uint32_t v = y; v < y + 2; ++v)
+    for (uint32_t u = x; u < x + 2; ++u) mean += even.image.at(u, v, 0) / 4.0;
+  CHECK(img.at(x, y, 0) == Approx(mean).epsilon(1e-6));
+  CHECK(img.at(x + 1, y + 1, 0) == Approx(mean).epsilon(1e-6));
+  // Nothing happens without a chart.
+  std::vector<uint8_t> none(even.footprint.size(), 0);
+  img = even.image;
+  atlas::coarsen_gutter(img, none, true);
+  CHECK(img.pixels == even.image.pixels);
 }
