@@ -268,27 +268,24 @@ void coarsen_gutter(Image& image, const std::vector<uint8_t>& footprint, bool sr
     sum[j].assign((N >> (2 * j)) * C, 0.0);
     count[j].assign(N >> (2 * j), 0);
   }
-  auto block = [&](int x, int y, int j) { return size_t(y >> j) * size_t(W >> j) + size_t(x >> j); };
-  for (int y = 0; y < H; ++y)
-    for (int x = 0; x < W; ++x) {
-      const size_t i = size_t(y) * W + x;
-      const int j = level[i];
-      if (j == 0) continue;
-      const size_t b = block(x, y, j);
-      ++count[j][b];
-      for (int c = 0; c < C; ++c) sum[j][b * C + c] += linear(image.pixels[i * C + c], c);
-    }
-  for (int y = 0; y < H; ++y)
-    for (int x = 0; x < W; ++x) {
-      const size_t i = size_t(y) * W + x;
-      const int j = level[i];
-      if (j == 0) continue;
-      const size_t b = block(x, y, j);
-      for (int c = 0; c < C; ++c) {
-        const float m = float(sum[j][b * C + c] / count[j][b]);
-        image.pixels[i * C + c] = c < colour ? srgb_encode_fast(m) : m;
+  // Every flattened texel with its level and its block there.
+  auto each = [&](auto&& visit) {
+    for (int y = 0; y < H; ++y)
+      for (int x = 0; x < W; ++x) {
+        const size_t i = size_t(y) * W + x;
+        if (const int j = level[i]) visit(i, j, size_t(y >> j) * size_t(W >> j) + size_t(x >> j));
       }
+  };
+  each([&](size_t i, int j, size_t b) {
+    ++count[j][b];
+    for (int c = 0; c < C; ++c) sum[j][b * C + c] += linear(image.pixels[i * C + c], c);
+  });
+  each([&](size_t i, int j, size_t b) {
+    for (int c = 0; c < C; ++c) {
+      const float m = float(sum[j][b * C + c] / count[j][b]);
+      image.pixels[i * C + c] = c < colour ? srgb_encode_fast(m) : m;
     }
+  });
 }
 
 uint32_t mip_safe_gutter(double image_texels, uint32_t coarsest_side, uint32_t minimum, uint32_t maximum) {
