@@ -219,23 +219,25 @@ void coarsen_gutter(Image& image, const std::vector<uint8_t>& footprint, bool sr
   const int W = int(image.width), H = int(image.height), C = int(image.channels);
   const size_t N = size_t(W) * H;
   if (footprint.size() != N || C == 0 || N == 0) return;
-  // The coarsest block: at most max_block, and dividing both sides.
-  int levels = 0;
-  while ((2u << levels) <= max_block && W % (2 << levels) == 0 && H % (2 << levels) == 0) ++levels;
-  if (levels == 0) return;
+  // The coarsest block B = 2^L: at most max_block (and 128: distances are bytes), and
+  // dividing both sides.
+  int L = 0;
+  while ((2u << L) <= std::min(max_block, 128u) && W % (2 << L) == 0 && H % (2 << L) == 0) ++L;
+  if (L == 0) return;
+  const int B = 1 << L;
   const int colour = srgb ? (C == 2 || C == 4 ? C - 1 : C) : 0;
 
-  // Chebyshev distance to the footprint: a breadth-first search over 8-neighbours from every
-  // footprint texel at once (exact for this metric), wrapping across the edges asked for.
-  constexpr uint32_t kFar = UINT32_MAX;
-  std::vector<uint32_t> d(N, kFar);
+  // Chebyshev distance to the footprint, up to B (farther is all alike: level L): a
+  // breadth-first search over 8-neighbours from every footprint texel at once (exact for this
+  // metric), wrapping across the edges asked for.
+  std::vector<uint8_t> d(N, uint8_t(B));
   std::vector<uint32_t> queue;
-  queue.reserve(N);
   for (size_t i = 0; i < N; ++i)
     if (footprint[i]) d[i] = 0, queue.push_back(uint32_t(i));
   if (queue.empty()) return;
   for (size_t head = 0; head < queue.size(); ++head) {
     const uint32_t i = queue[head];
+    if (d[i] + 1 >= B) continue;
     const int x = int(i % uint32_t(W)), y = int(i / uint32_t(W));
     for (int dy = -1; dy <= 1; ++dy)
       for (int dx = -1; dx <= 1; ++dx) {
@@ -249,43 +251,44 @@ void coarsen_gutter(Image& image, const std::vector<uint8_t>& footprint, bool sr
           v = (v + H) % H;
         }
         const size_t k = size_t(v) * W + u;
-        if (d[k] == kFar) d[k] = d[i] + 1, queue.push_back(uint32_t(k));
+        if (d[k] == B) d[k] = uint8_t(d[i] + 1), queue.push_back(uint32_t(k));
       }
   }
+  // A texel's level j: 2^j the largest power of two <= its distance, at most B (0: kept).
+  uint8_t level_of[256] = {};
+  for (int t = 2; t <= B; ++t) level_of[t] = uint8_t(level_of[t / 2] + 1);
 
-  // Per texel its level j (0: kept), then per level and block the sum and the count of the
-  // texels that take that block's mean.
-  std::vector<uint8_t> level(N, 0);
-  for (size_t i = 0; i < N; ++i) {
-    int j = 0;
-    while (j < levels && (2u << j) <= d[i]) ++j;
-    level[i] = uint8_t(j);
-  }
+  // Tile by tile (B x B, so that every block lies in one): per level and block the sum and
+  // count of the texels that take that block's mean, then the means.
   auto linear = [&](float v, int c) { return c < colour ? double(srgb_decode_fast(v)) : double(v); };
-  std::vector<std::vector<double>> sum(size_t(levels) + 1);
-  std::vector<std::vector<uint32_t>> count(size_t(levels) + 1);
-  for (int j = 1; j <= levels; ++j) {
-    sum[j].assign((N >> (2 * j)) * C, 0.0);
-    count[j].assign(N >> (2 * j), 0);
-  }
-  // Every flattened texel with its level and its block there.
-  auto each = [&](auto&& visit) {
-    for (int y = 0; y < H; ++y)
-      for (int x = 0; x < W; ++x) {
-        const size_t i = size_t(y) * W + x;
-        if (const int j = level[i]) visit(i, j, size_t(y >> j) * size_t(W >> j) + size_t(x >> j));
-      }
-  };
-  each([&](size_t i, int j, size_t b) {
-    ++count[j][b];
-    for (int c = 0; c < C; ++c) sum[j][b * C + c] += linear(image.pixels[i * C + c], c);
-  });
-  each([&](size_t i, int j, size_t b) {
-    for (int c = 0; c < C; ++c) {
-      const float m = float(sum[j][b * C + c] / count[j][b]);
-      image.pixels[i * C + c] = c < colour ? srgb_encode_fast(m) : m;
+  std::vector<double> sum;
+  std::vector<uint32_t> count;
+  std::vector<size_t> offset(size_t(L) + 2, 0);  // level j's blocks start at offset[j]
+  for (int j = 1; j <= L; ++j) offset[size_t(j) + 1] = offset[size_t(j)] + size_t(B >> j) * size_t(B >> j);
+  for (int ty = 0; ty < H; ty += B)
+    for (int tx = 0; tx < W; tx += B) {
+      sum.assign(offset[size_t(L) + 1] * C, 0.0);
+      count.assign(offset[size_t(L) + 1], 0);
+      // Every flattened texel of the tile with its level's block.
+      auto each = [&](auto&& visit) {
+        for (int y = ty; y < ty + B; ++y)
+          for (int x = tx; x < tx + B; ++x) {
+            const size_t i = size_t(y) * W + x;
+            if (const int j = level_of[d[i]])
+              visit(i, offset[size_t(j)] + size_t((y - ty) >> j) * size_t(B >> j) + size_t((x - tx) >> j));
+          }
+      };
+      each([&](size_t i, size_t b) {
+        ++count[b];
+        for (int c = 0; c < C; ++c) sum[b * C + c] += linear(image.pixels[i * C + c], c);
+      });
+      each([&](size_t i, size_t b) {
+        for (int c = 0; c < C; ++c) {
+          const float m = float(sum[b * C + c] / count[b]);
+          image.pixels[i * C + c] = c < colour ? srgb_encode_fast(m) : m;
+        }
+      });
     }
-  });
 }
 
 uint32_t mip_safe_gutter(double image_texels, uint32_t coarsest_side, uint32_t minimum, uint32_t maximum) {

@@ -65,6 +65,9 @@ void fill_gutter(Image& image, const std::vector<uint8_t>& covered, bool srgb = 
 // carry at level 0, which nothing on screen samples, goes, and with it bytes (README, Bytes).
 // An odd side gets nothing: its chain's blocks drift against level 0's (a 717-texel side halves
 // to 358 texels of 2.003), and a flattened block would change what they average.
+// The reach assumes isotropic filtering (three.js's default, eval's views): anisotropic taps
+// spread along a footprint's long axis and can read flattened texels at level 0 near a
+// chart seen edge-on. `max_block` at most 128.
 // `footprint` (width * height, 1 = a triangle overlaps the texel: RebakeStats::footprint);
 // `srgb` as fill_gutter (means in linear light, alpha as stored); `wrap_x`, `wrap_y`: the
 // sampler repeats across that edge, so distances wrap around (clamping and mirroring read

@@ -145,7 +145,6 @@ std::string describe_encoded(const std::vector<uint8_t>& bytes) {
   EncodeSettings s = encode_settings_of(bytes);
   s.palette_when_faithful = false;  // choices for re-encoding, not properties of these bytes
   s.palette_colours.clear();
-  s.importance.clear();
   return describe(s);
 }
 

@@ -2,6 +2,7 @@
 
 #include <libimagequant.h>
 
+#include <algorithm>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -38,8 +39,10 @@ PaletteImage quantize_palette(const uint8_t* rgba, uint32_t width, uint32_t heig
   std::unique_ptr<liq_image, Free> image(liq_image_create_rgba(attr.get(), rgba, int(width), int(height), 0));
   if (!image) throw std::runtime_error("libimagequant: cannot take a " + std::to_string(width) + "x" + std::to_string(height) + " image");
   if (importance && importance->size() == size_t(width) * height) {
-    // libimagequant takes the buffer as non-const; LIQ_COPY_PIXELS copies it.
+    // libimagequant takes the buffer as non-const (LIQ_COPY_PIXELS copies it), and a weight
+    // of 0 as none at all.
     std::vector<uint8_t> weights(*importance);
+    for (uint8_t& w : weights) w = std::max<uint8_t>(w, 1);
     if (liq_image_set_importance_map(image.get(), weights.data(), weights.size(), LIQ_COPY_PIXELS) != LIQ_OK)
       throw std::runtime_error("libimagequant: cannot set the importance map");
   }

@@ -20,8 +20,10 @@ struct PaletteImage {
 // `dithering` (0: none, 1: full). With `fixed` (at most 256 colours) the palette is those
 // colours and no other, in their order: each texel takes the fixed colour libimagequant
 // finds nearest (dithered as asked). `importance`, when not null (width * height, row-major):
-// how much each texel's colour weighs in a new palette's fit (libimagequant's importance map;
-// 0 counts as 1). Throws std::runtime_error when libimagequant fails.
+// how much each texel's colour weighs in a new palette's fit (libimagequant's importance map,
+// which then replaces the edge and noise weights libimagequant would derive itself; 0 is
+// taken as 1, so that every texel counts a little). Throws std::runtime_error when
+// libimagequant fails.
 PaletteImage quantize_palette(const uint8_t* rgba, uint32_t width, uint32_t height, float dithering,
                               const std::vector<std::array<uint8_t, 4>>& fixed = {},
                               const std::vector<uint8_t>* importance = nullptr);

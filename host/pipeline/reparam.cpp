@@ -371,10 +371,11 @@ struct Candidate {
   // texels, at most 32: twice as wide where the cap allows).
   bool wide_gutter = false;
   // The image's mip chain kept whole at the levels the gutter keeps apart (A = the largest
-  // power of two <= the gutter that the block divides, atlas::mip_phase_align): sides multiples of A
-  // (atlas::BudgetOptions::side_multiple) and the copied units' translations multiples of A
-  // (atlas::ChartShape::align), so that a copied unit's texels at levels 1..log2 A are the
-  // texels of the image it was copied from at those levels, not boxes of another phase.
+  // power of two <= the gutter that the block divides, atlas::mip_phase_align): every
+  // candidate's sides are multiples of A (budget_options), and these also the copied units'
+  // translations (atlas::ChartShape::align), so that a copied unit's texels at levels
+  // 1..log2 A are the texels of the image it was copied from at those levels, not boxes of
+  // another phase.
   bool mip_aligned = false;
   uint32_t mip_depth = 1;  // sides multiples of mip_depth * A (2: one level cleaner than the gutter)
   // The copied units packed at the source's density (atlas::ChartShape::pinned), the others
@@ -565,16 +566,22 @@ bool unit_scales_differ(const Prepared& P, double c) {
 }
 
 // A new palette's weights (io::EncodeSettings::importance): full for the texels that a
-// chart's bilinear taps read at level 0 (its footprint and the ring around it), a sixteenth
-// for the gutter, which only coarse mip levels see, averaged (atlas::coarsen_gutter).
-std::vector<uint8_t> palette_importance(const std::vector<uint8_t>& footprint, uint32_t width, uint32_t height) {
+// chart's bilinear taps read at level 0 (its footprint and the ring around it, across an edge
+// that a sampler repeats across), a sixteenth for the gutter, which only coarse mip levels
+// see, averaged (atlas::coarsen_gutter).
+std::vector<uint8_t> palette_importance(const std::vector<uint8_t>& footprint, uint32_t width, uint32_t height,
+                                        bool wrap_x, bool wrap_y) {
   std::vector<uint8_t> weight(size_t(width) * height, 16);
   if (footprint.size() != weight.size()) return {};
-  for (uint32_t y = 0; y < height; ++y)
-    for (uint32_t x = 0; x < width; ++x) {
-      if (!footprint[size_t(y) * width + x]) continue;
-      for (uint32_t v = y > 0 ? y - 1 : 0; v <= std::min(y + 1, height - 1); ++v)
-        for (uint32_t u = x > 0 ? x - 1 : 0; u <= std::min(x + 1, width - 1); ++u) weight[size_t(v) * width + u] = 255;
+  const int W = int(width), H = int(height);
+  for (int y = 0; y < H; ++y)
+    for (int x = 0; x < W; ++x) {
+      if (!footprint[size_t(y) * W + x]) continue;
+      for (int v = y - 1; v <= y + 1; ++v)
+        for (int u = x - 1; u <= x + 1; ++u) {
+          if ((!wrap_x && (u < 0 || u >= W)) || (!wrap_y && (v < 0 || v >= H))) continue;
+          weight[size_t((v + H) % H) * W + size_t((u + W) % W)] = 255;
+        }
     }
   return weight;
 }
@@ -957,10 +964,12 @@ Realized realize(const io::Asset& asset, const std::vector<Layout>& layouts, con
       // is seen. Not into the input's own palette, where each flat block's mean would take
       // the nearest entry, and the coarse levels another colour (Duck: q 0.000292 -> 0.000298
       // for 1 % of its bytes).
-      if (!(settings.palette && !settings.palette_colours.empty()))
-        atlas::coarsen_gutter(baked, coverage.footprint, ro.role == atlas::RebakeRole::Color, ro.wrap_s == atlas::kWrapRepeat,
-                              ro.wrap_t == atlas::kWrapRepeat);
-      if (settings.palette_when_faithful) settings.importance = palette_importance(coverage.footprint, baked.width, baked.height);
+      // Nor under --max-gmsd, which resizes the texture afterwards by any ratio. Distances wrap
+      // where any of the layout's samplers repeats.
+      if (!(settings.palette && !settings.palette_colours.empty()) && o.max_gmsd <= 0)
+        atlas::coarsen_gutter(baked, coverage.footprint, ro.role == atlas::RebakeRole::Color, repeats[0], repeats[1]);
+      if (settings.palette_when_faithful)
+        settings.importance = palette_importance(coverage.footprint, baked.width, baked.height, repeats[0], repeats[1]);
       file.image_bytes[size_t(i)] = io::encode_image(baked, settings);
       out.old_texels += double(source.width) * source.height;
       out.new_texels += double(baked.width) * baked.height;

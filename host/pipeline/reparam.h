@@ -225,8 +225,8 @@ struct LayoutReport {
   bool capped_at_source_density = false;  // scale reached scale_cap
   double packing_efficiency = 0;  // share of the image's texels under charts
   uint32_t gutter = 0;            // texels between charts
-  uint32_t mip_align = 1;         // copies' translations multiples of it (a +mip-aligned candidate) ...
-  uint32_t side_multiple = 1;     // ... and the atlas's sides multiples of this
+  uint32_t mip_align = 1;         // copies' translations multiples of it (a +mip-aligned candidate)
+  uint32_t side_multiple = 1;     // the atlas's sides multiples of this (every candidate but under --size)
   std::array<uint32_t, 2> edge_gutter{};  // texels at the left/right and top/bottom edges
   double gutter_texels = 0;       // texels kept empty around charts and at the edges
   double footprint_texels = 0;    // texels under the charts' footprints (covered ones and their rims: atlas::Packing)

@@ -71,7 +71,8 @@ json layout_json(const LayoutReport& l) {
   j["capped_at_source_density"] = l.capped_at_source_density;
   j["packing_efficiency"] = l.packing_efficiency;
   j["gutter"] = l.gutter;
-  if (l.mip_align > 1) j["mip_align"] = l.mip_align, j["side_multiple"] = l.side_multiple;
+  if (l.mip_align > 1) j["mip_align"] = l.mip_align;
+  if (l.side_multiple > 1) j["side_multiple"] = l.side_multiple;
   j["edge_gutter"] = l.edge_gutter;
   j["gutter_texels"] = l.gutter_texels;
   j["footprint_texels"] = l.footprint_texels;

@@ -148,7 +148,7 @@ TEST_CASE("gutter fill: the mip-safe gutter grows with the image's side", "[atla
 
 namespace {
 
-// A 128 x 128 sRGB image whose charts hold a smooth gradient and whose gutter holds noise
+// A W x H sRGB image whose charts hold a smooth gradient and whose gutter holds noise
 // (8-bit values, as a decoded texture): a disc in the middle and a bar along the right edge,
 // which a sampler that repeats reads across to the left edge.
 struct NoisyAtlas {
