@@ -268,16 +268,19 @@ TEST_CASE("reparam's guard writes the plain resize when the layout loses, and re
           "[pipeline][reparam][shared]") {
   if (!test::shared_dir()) UVPRESS_SKIP("../shared is absent");
   auto engine = engine::make_cpu_engine({});
-  // Duck's charts only repacked at half the texels with a 4-texel gutter into an atlas of
+  // Duck's charts only repacked at half the texels with a 1-texel gutter into an atlas of
   // the source's (square) shape: its atlas is already tight, so the repack gets a smaller
-  // scale than a resize and is resampled twice: built to lose (q 0.00027 vs 0.00023; at
-  // the mip-safe 8-texel default the repack wins, 0.00021). Duck as a truecolour input:
-  // written in its own palette, the resize's blends lose more to it than the repack's
-  // aligned copies do, and the repack wins (0.00081 against 0.00090).
+  // scale than a resize, is resampled twice, and its charts bleed into each other from the
+  // first mip level on: built to lose (q 0.00096 against the resize's 0.00069). At a
+  // 4-texel gutter it lost while its sides were free (0.00027 against 0.00023); with sides
+  // multiples of 4 (session 57) its mip chain is exact boxes and it wins, 0.00066 against
+  // 0.00077. Duck as a truecolour input: written in its own palette, the resize's blends
+  // lose more to it than the repack's aligned copies do, and the repack wins (0.00081
+  // against 0.00090).
   const io::GltfFile in = truecolour(shared_duck());
   io::GltfFile out = in, layout;
   pipeline::ReparamOptions losing = keep_shapes(0.5);
-  losing.gutter = 4;
+  losing.gutter = 1;
   losing.keep_aspect = true;
   auto report = pipeline::reparam(out, *engine, losing, {}, &layout).to_json();
   INFO(report.dump());
@@ -608,7 +611,10 @@ TEST_CASE("reparam --no-optimize at cost 1 on Duck: with the mip chain kept whol
   // scored q 0.00070 (0.00068 at the wide gutter), as much as the resize to half the
   // texels: the copies sat at odd offsets in a 514 x 432 image, whose coarser levels
   // average other blocks than the input's 512 x 512 chain does. Aligned (sides multiples of
-  // 32, copies moved by multiples of 16): q 2.1e-5.
+  // 32, copies moved by multiples of 16): q 2.1e-5. Since then the texture is written in
+  // Duck's own palette, whose loss is most of what is left (aligned: 0.00021), and every
+  // candidate's sides are multiples of the gutter's 8 (session 57), so the plain repack
+  // differs from the aligned one by its copies' offsets alone: 0.00056 against 0.00021.
   if (!test::shared_dir()) UVPRESS_SKIP("../shared is absent");
   auto engine = engine::make_cpu_engine({});
   pipeline::ReparamOptions o = keep_shapes(1.0);
@@ -620,7 +626,7 @@ TEST_CASE("reparam --no-optimize at cost 1 on Duck: with the mip chain kept whol
   REQUIRE(q_repack > 0);
   const auto [q_aligned, aligned] = best_aligned(report);
   REQUIRE(aligned > 0);
-  CHECK(q_aligned < 0.25 * q_repack);
+  CHECK(q_aligned < 0.5 * q_repack);
   CHECK(report["layout"].get<std::string>().find("+mip-aligned") != std::string::npos);
   REQUIRE(run.result.layouts.size() == 1);
   CHECK(run.result.layouts[0].exact_units == run.result.layouts[0].packing_units);
