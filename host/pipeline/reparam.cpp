@@ -491,8 +491,8 @@ atlas::BudgetOptions budget_options(const ReparamOptions& o, const Candidate& ca
   // the gutter's fill and coarsen_gutter's flat blocks then no longer average as planned.
   // At least four of them a side: a tiny budget under a wide gutter would otherwise round a
   // side up past the budget (SizeRule::dims floors the shorter side at one multiple). Not
-  // under --size, whose side is the user's.
-  if (o.size > 0 && !cand.mip_aligned) return budget;
+  // under --size, whose side is the user's (nor are the aligned variants built there).
+  if (o.size > 0) return budget;
   uint32_t m = (cand.mip_aligned ? cand.mip_depth : 1) * atlas::mip_phase_align(budget.pack.gutter, budget.pack.block);
   while (m > 1 && 4.0 * m > std::sqrt(budget_texels) && (m / 2) % std::max(1u, o.block) == 0) m /= 2;
   budget.side_multiple = m;
