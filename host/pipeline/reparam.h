@@ -111,6 +111,9 @@ struct Guard {
   std::string skipped;  // why eval could not score the asset, when it could not
   double q_reparam = -1, q_resize = -1;
   std::string chosen;   // "reparam" | "resize"
+  // The resize scored (the better of two): its sides multiples of reparam's image's
+  // (LayoutReport::side_multiple) rather than at the nearest size.
+  bool resize_aligned = false;
   // Re-baked images that the scoring views do not render (their layout is not the driving
   // image's: MultiUVTest's emissive map on TEXCOORD_1), by name: neither q sees them.
   std::vector<std::string> unseen;

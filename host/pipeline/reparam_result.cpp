@@ -160,7 +160,7 @@ json ReparamResult::to_json() const {
                                                  {"score", c.seconds_score}}}});
   if (guard.ran) {
     report["guard"] = {{"q_reparam", guard.q_reparam}, {"q_resize", guard.q_resize}, {"resize", "lanczos3-srgb"},
-                       {"chosen", guard.chosen}};
+                       {"resize_sides", guard.resize_aligned ? "aligned" : "nearest"}, {"chosen", guard.chosen}};
     if (!guard.unseen.empty()) report["guard"]["unseen"] = guard.unseen;
     if (guard.far)
       report["guard"]["far"] = {{"resolution", guard.far->resolution}, {"q_reparam", guard.far->q_reparam}, {"q_resize", guard.far->q_resize},

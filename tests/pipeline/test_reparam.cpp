@@ -578,6 +578,22 @@ TEST_CASE("reparam on Duck at half the texels: gutters and mip alignment built, 
   // written in Duck's own palette, below); 0.00017 since the kept plan is aligned at the
   // wide gutter too (16 texels, sides multiples of 32), against 0.00069.
   CHECK(report["chosen"] == "reparam");
+  // The guard's resize is the better of two sizes at most the layout's texels: the nearest
+  // (here 359 x 359, an odd side, whose mip chain drifts) and sides multiples of the layout's
+  // 32 (352 x 352). The second wins: eval, truecolour, q 0.00089 at 359, 0.00068 at 352.
+  {
+    const pipeline::LayoutReport& l = result.layouts[0];
+    const double texels = double(l.atlas[0]) * l.atlas[1];
+    const uint32_t nearest = uint32_t(std::lround(std::sqrt(texels))), aligned = uint32_t(std::sqrt(texels)) / l.side_multiple * l.side_multiple;
+    const eval::EvalResult at_nearest = input_at(run.in, *engine, double(nearest) * nearest / (512.0 * 512.0));
+    const eval::EvalResult at_aligned = input_at(run.in, *engine, double(aligned) * aligned / (512.0 * 512.0));
+    REQUIRE(at_nearest.layouts[0].curve[0].width == nearest);
+    REQUIRE(at_aligned.layouts[0].curve[0].width == aligned);
+    INFO("resize at " << nearest << ": " << at_nearest.layouts[0].curve[0].q << ", at " << aligned << ": " << at_aligned.layouts[0].curve[0].q);
+    CHECK(nearest % 2 == 1);
+    CHECK(at_aligned.layouts[0].curve[0].q < at_nearest.layouts[0].curve[0].q);
+    CHECK(report["guard"]["resize_sides"] == "aligned");
+  }
   const eval::EvalResult half = input_at(run.in, *engine, 0.5);
   REQUIRE(half.layouts.size() == 1);
   REQUIRE(half.layouts[0].curve.size() == 1);
