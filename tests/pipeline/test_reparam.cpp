@@ -4,6 +4,7 @@
 
 #include "engine.h"
 #include "eval/eval.h"
+#include "eval/resize.h"
 #include "io/asset.h"
 #include "io/asset_bytes.h"
 #include "io/gltf_append.h"
@@ -580,18 +581,23 @@ TEST_CASE("reparam on Duck at half the texels: gutters and mip alignment built, 
   CHECK(report["chosen"] == "reparam");
   // The guard's resize is the better of two sizes at most the layout's texels: the nearest
   // (here 359 x 359, an odd side, whose mip chain drifts) and sides multiples of the layout's
-  // 32 (352 x 352). The second wins: eval, truecolour, q 0.00089 at 359, 0.00068 at 352.
+  // 32 (352 x 352). The second wins: each written as a truecolour PNG and scored as written,
+  // q 0.00089 at 359, 0.00068 at 352.
   {
     const pipeline::LayoutReport& l = result.layouts[0];
     const double texels = double(l.atlas[0]) * l.atlas[1];
     const uint32_t nearest = uint32_t(std::lround(std::sqrt(texels))), aligned = uint32_t(std::sqrt(texels)) / l.side_multiple * l.side_multiple;
-    const eval::EvalResult at_nearest = input_at(run.in, *engine, double(nearest) * nearest / (512.0 * 512.0));
-    const eval::EvalResult at_aligned = input_at(run.in, *engine, double(aligned) * aligned / (512.0 * 512.0));
-    REQUIRE(at_nearest.layouts[0].curve[0].width == nearest);
-    REQUIRE(at_aligned.layouts[0].curve[0].width == aligned);
-    INFO("resize at " << nearest << ": " << at_nearest.layouts[0].curve[0].q << ", at " << aligned << ": " << at_aligned.layouts[0].curve[0].q);
+    const Image source = io::decode_image(run.in.image_bytes[0], "DuckCM.png");
+    auto resized_q = [&](uint32_t side) {
+      io::GltfFile f = run.in;
+      f.image_bytes[0] = io::encode_image(eval::resize_lanczos3(source, side, side, false), "png");
+      return eval::score_as_written(run.in, f, *engine, eo).q;
+    };
+    const double q_nearest = resized_q(nearest), q_aligned = resized_q(aligned);
+    INFO("resize at " << nearest << ": " << q_nearest << ", at " << aligned << ": " << q_aligned);
     CHECK(nearest % 2 == 1);
-    CHECK(at_aligned.layouts[0].curve[0].q < at_nearest.layouts[0].curve[0].q);
+    CHECK(aligned < nearest);
+    CHECK(q_aligned < q_nearest);
     CHECK(report["guard"]["resize_sides"] == "aligned");
   }
   const eval::EvalResult half = input_at(run.in, *engine, 0.5);
